@@ -1,0 +1,395 @@
+"""``solve_dae``: the driver around the BDF stepper.
+
+It validates the input, makes the initial values consistent, and steps with
+``NordsieckBDF`` from t0 to t_end. Around each step it
+
+- never steps past a ``tstop`` (a known time discontinuity): the step lands on
+  it exactly, with the residual evaluated at the left limit, and integration
+  restarts there at order 1 from values made consistent at the right limit;
+- watches the switch functions; on a sign change it locates the zero on the
+  step's interpolant (``events.locate_zero``), cuts the step there, runs the
+  switch's action, makes the state consistent again and restarts at order 1
+  (the seed's Fig. 10.7); several switches in one step: the earliest wins;
+- emits the output points (every step, or ``t_eval``) to the result and to an
+  optional ``callback`` that can stream them to disk.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from dnasim.errors import DAEError, ResidualDomainError
+from dnasim.solver import nordsieck as nd
+from dnasim.solver.bdf import CountedResidual, NordsieckBDF, SolverStats
+from dnasim.solver.events import SwitchFunction, locate_zero
+from dnasim.solver.initial import detect_algebraic, make_consistent
+from dnasim.solver.linear_algebra import IterationMatrix
+from dnasim.solver.result import DAEResult, NordsieckSolution
+
+MAX_RESTARTS_AT_ONE_TIME = 50
+
+
+def solve_dae(
+    residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
+    t_span: Sequence[float],
+    y0,
+    yp0=None,
+    *,
+    algebraic=None,
+    rtol: float = 1e-6,
+    atol=1e-8,
+    max_order: int = 4,
+    h0: float | None = None,
+    max_step: float = np.inf,
+    jac: Callable | None = None,
+    jac_sparsity=None,
+    events: Sequence[Callable] = (),
+    tstops: Sequence[float] = (),
+    t_eval=None,
+    calc_initial: bool = True,
+    exclude_algebraic_from_error: bool = False,
+    callback: Callable | None = None,
+    variable_names: Sequence[str] | None = None,
+    dense_output: bool = True,
+    max_steps: int = 500_000,
+) -> DAEResult:
+    """Solve the index-1 DAE F(t, y, y') = 0 from t_span[0] to t_span[1].
+
+    Parameters
+    ----------
+    residual : F(t, y, yp) -> array of shape (n,). dF/dy' may be singular; a
+        differential equation may hold derivatives of other variables.
+        It may raise ``dnasim.errors.ResidualDomainError`` for a state outside
+        its domain: the step is then cut, like a failed Newton iteration.
+    t_span : (t0, t_end), t_end > t0.
+    y0, yp0 : initial values; yp0 defaults to zeros.
+    algebraic : indices or boolean mask of the components whose derivative
+        appears nowhere. None: found by probing dF/dy'.
+    rtol, atol : error tolerances; weights 1 / (rtol |y_i| + atol_i); atol
+        scalar or per component, > 0.
+    max_order : highest BDF order, 1..5 (default 4, as the seed argues).
+    h0 : first step (default as IDA: 0.001 of the span, at most 0.5/||y'||).
+    max_step : largest step.
+    jac : optional jac(t, y, yp, cj) -> dF/dy + cj dF/dy', dense or sparse.
+    jac_sparsity : optional pattern of dF/dy + dF/dy'; finite differences are
+        then grouped by column colouring and the LU is sparse.
+    events : switch functions g(t, y, yp) -> float, with optional attributes
+        ``direction`` (-1, 0, 1), ``terminal`` (bool), ``action(t, y, yp)``
+        returning new (y, yp) or None, and ``name``.
+    tstops : known discontinuity times, hit exactly; restart at order 1.
+    t_eval : output times (default: every accepted step).
+    calc_initial : make (y0, yp0) consistent first (keep the differential y0).
+    exclude_algebraic_from_error : leave algebraic components out of the error test.
+    callback : callback(t, y, yp) for every output point, in order (streaming).
+    variable_names : names of the components, used in error messages.
+    dense_output : keep the Nordsieck polynomials for ``result.sol(t)``.
+    max_steps : give up after this many steps.
+
+    Returns
+    -------
+    DAEResult. On a failure during integration, raises ``DAEError`` whose
+    ``result`` attribute holds the solution up to the last accepted step.
+    """
+    problem = _Problem.validate(
+        residual, t_span, y0, yp0, algebraic, rtol, atol, max_order, h0, max_step,
+        jac_sparsity, events, tstops, t_eval, variable_names,
+    )  # fmt: skip
+    stats = SolverStats()
+    F = CountedResidual(residual, problem.n, stats)
+    matrix = IterationMatrix(F, problem.n, jac, problem.sparsity, variable_names)
+    t0, t_end = problem.t0, problem.t_end
+    y, yp = problem.y0, problem.yp0
+    try:
+        F(t0, y, yp)
+    except ResidualDomainError as exc:
+        raise DAEError(f"The residual cannot be evaluated at the initial values: {exc}") from None
+    algebraic_mask = problem.algebraic
+    if algebraic_mask is None:
+        algebraic_mask = detect_algebraic(F, t0, y, yp, matrix)
+    error_mask = np.ones(problem.n)
+    if exclude_algebraic_from_error:
+        error_mask[algebraic_mask] = 0.0
+    span = t_end - t0
+    ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
+    weights = 1.0 / (rtol * np.abs(y) + problem.atol)
+
+    def consistent(t, y, yp):
+        return make_consistent(F, t, y, yp, algebraic_mask, weights, ic_scale, matrix)
+
+    if calc_initial:
+        y, yp = consistent(t0, y, yp)
+    solver = NordsieckBDF(
+        F, t0, y, yp,
+        rtol=rtol, atol=problem.atol, max_order=max_order, h0=h0, max_step=max_step,
+        error_mask=error_mask, matrix=matrix, stats=stats, t_scale=span,
+        names=variable_names,
+    )  # fmt: skip
+    out = _Output(problem.t_eval, callback, dense_output, t0)
+    out.initial(t0, y, yp)
+    switches = [SwitchFunction.wrap(g, i) for i, g in enumerate(events)]
+    g_old = [sw.value(t0, y, yp) for sw in switches]
+    event_log: list[dict] = []
+    t_events: list[list] = [[] for _ in switches]
+    y_events: list[list] = [[] for _ in switches]
+    stops = [s for s in problem.tstops if t0 < s < t_end]
+    status, message = 0, "The solver reached the end of the interval."
+    restarts_here, last_restart_t = 0, None
+
+    def partial_result(success, status, message):
+        return DAEResult(
+            *out.arrays(problem.n), success, status, message,
+            [np.array(v) for v in t_events],
+            [np.array(v).reshape(-1, problem.n) for v in y_events],
+            event_log, stats.as_dict(), out.step_history(), out.solution(),
+        )  # fmt: skip
+
+    try:
+        while solver.t < t_end:
+            if stats.steps >= max_steps:
+                raise DAEError(
+                    f"The solver took {max_steps} steps and reached only t = {solver.t:.10g}; "
+                    "raise max_steps or check the model for fast oscillations."
+                )
+            next_stop = stops[0] if stops and stops[0] > solver.t else t_end
+            t_prev = solver.t
+            solver.step(next_stop, left_limit=next_stop < t_end)
+            g_new = [sw.value(solver.t, solver.y, solver.yp) for sw in switches]
+            cut = _earliest_crossing(solver, switches, g_old, g_new, t_prev)
+            for k, t_star, y_star, yp_star, g_star, iterates, restarting in cut:
+                sw = switches[k]
+                event_log.append(
+                    {"event": k, "name": sw.name, "t": t_star, "iterates": iterates,
+                     "terminal": sw.terminal}
+                )  # fmt: skip
+                t_events[k].append(t_star)
+                y_events[k].append(y_star)
+            if cut and cut[-1][-1]:
+                k, t_star, y_star, yp_star, g_star, iterates, _ = cut[-1]
+                sw = switches[k]
+                out.step(solver, t_prev, t_star)
+                if sw.terminal:
+                    status, message = 1, f"A terminal switch, {sw.name!r}, fired at t = {t_star:.10g}."
+                    break
+                if t_star == last_restart_t:
+                    restarts_here += 1
+                    if restarts_here > MAX_RESTARTS_AT_ONE_TIME:
+                        raise DAEError(
+                            f"The switch {sw.name!r} fires again and again at t = {t_star:.10g} "
+                            "(chattering): its action does not move the state to the other side."
+                        )
+                else:
+                    restarts_here, last_restart_t = 0, t_star
+                y_new, yp_new = y_star, yp_star
+                if sw.action is not None:
+                    changed = sw.action(t_star, y_star.copy(), yp_star.copy())
+                    if changed is not None:
+                        y_new, yp_new = (np.asarray(v, dtype=float) for v in changed)
+                y_new, yp_new = consistent(t_star, y_new, yp_new)
+                solver.restart(t_star, y_new, yp_new)
+                out.restart(t_star, y_new, yp_new)
+                g_old = [sw.value(t_star, y_new, yp_new) for sw in switches]
+                continue
+            out.step(solver, t_prev, solver.t)
+            g_old = g_new
+            if stops and solver.t == stops[0]:
+                stops.pop(0)
+                y_new, yp_new = consistent(solver.t, solver.y, solver.yp)
+                solver.restart(solver.t, y_new, yp_new)
+                out.restart(solver.t, y_new, yp_new)
+                g_old = [sw.value(solver.t, y_new, yp_new) for sw in switches]
+    except DAEError as exc:
+        result = partial_result(False, -1, str(exc))
+        error = DAEError(str(exc))
+        error.result = result
+        raise error from None
+    return partial_result(True, status, message)
+
+
+def _earliest_crossing(solver, switches, g_old, g_new, t_prev):
+    """Locate the crossings in the last step; return those up to the first that restarts.
+
+    Each entry: (switch index, t*, y*, y'*, g(t*), iterates, restarts). Crossings
+    of observing switches (no action, not terminal) before the first restarting
+    one are all returned; later ones are dropped (they are found again).
+    """
+    found = []
+    for k, sw in enumerate(switches):
+        if not sw.crossed(g_old[k], g_new[k]):
+            continue
+
+        def g_of_t(t, sw=sw):
+            y, yp = solver.interpolate(t)
+            return sw.value(t, y, yp)
+
+        t_star, g_star, iterates = locate_zero(g_of_t, t_prev, g_old[k], solver.t, g_new[k])
+        y_star, yp_star = solver.interpolate(t_star)
+        restarts = sw.terminal or sw.action is not None
+        found.append((k, t_star, y_star, yp_star, g_star, iterates, restarts))
+    found.sort(key=lambda c: c[1])
+    result = []
+    for c in found:
+        result.append(c)
+        if c[-1]:
+            break
+    return result
+
+
+class _Output:
+    """Collects output points (and dense-output pieces) and forwards them to the callback."""
+
+    def __init__(self, t_eval, callback, dense_output, t0):
+        self.t_eval = t_eval
+        self.next_eval = 0
+        self.callback = callback
+        self.dense = dense_output
+        self.t, self.y, self.yp = [], [], []
+        self.history = []
+        self.pieces = []
+        self.t0 = t0
+
+    def _emit(self, t, y, yp):
+        self.t.append(t)
+        self.y.append(np.array(y))
+        self.yp.append(np.array(yp))
+        if self.callback is not None:
+            self.callback(t, y, yp)
+
+    def initial(self, t, y, yp):
+        if self.t_eval is None:
+            self._emit(t, y, yp)
+        else:
+            while self.next_eval < len(self.t_eval) and self.t_eval[self.next_eval] <= t:
+                self._emit(self.t_eval[self.next_eval], y, yp)
+                self.next_eval += 1
+
+    def step(self, solver, t_prev, t_until):
+        """Output of the step just taken, on (t_prev, t_until] (t_until <= solver.t)."""
+        self.history.append((t_until, t_until - t_prev, solver.q_used))
+        if self.dense:
+            t_ref, h, q, z = solver.nordsieck_snapshot()
+            self.pieces.append((t_until, t_ref, h, q, z))
+        if self.t_eval is None:
+            if t_until == solver.t:
+                self._emit(t_until, solver.y, solver.yp)
+            else:
+                self._emit(t_until, *solver.interpolate(t_until))
+            return
+        while self.next_eval < len(self.t_eval) and self.t_eval[self.next_eval] <= t_until:
+            te = self.t_eval[self.next_eval]
+            if te == solver.t:
+                self._emit(te, solver.y, solver.yp)
+            else:
+                self._emit(te, *solver.interpolate(te))
+            self.next_eval += 1
+
+    def restart(self, t, y, yp):
+        """After a discontinuity: the state right after it (an extra point at the same t)."""
+        if self.t_eval is None:
+            self._emit(t, y, yp)
+
+    def arrays(self, n):
+        if not self.t:
+            return np.empty(0), np.empty((n, 0)), np.empty((n, 0))
+        return np.array(self.t), np.array(self.y).T, np.array(self.yp).T
+
+    def step_history(self):
+        return np.array(self.history, dtype=float).reshape(-1, 3)
+
+    def solution(self):
+        return NordsieckSolution(self.pieces, self.t0) if self.dense and self.pieces else None
+
+
+class _Problem:
+    """Validated problem data; every check raises DAEError with a plain message."""
+
+    @classmethod
+    def validate(
+        cls, residual, t_span, y0, yp0, algebraic, rtol, atol, max_order, h0, max_step,
+        sparsity, events, tstops, t_eval, names,
+    ):  # fmt: skip
+        p = cls()
+        if not callable(residual):
+            raise DAEError("residual must be a function F(t, y, yp) -> array.")
+        try:
+            t0, t_end = (float(v) for v in t_span)
+        except (TypeError, ValueError):
+            raise DAEError(f"t_span must be two numbers (t0, t_end); got {t_span!r}.") from None
+        if not (np.isfinite(t0) and np.isfinite(t_end)) or t_end <= t0:
+            raise DAEError(f"t_span must be finite with t_end > t0; got ({t0}, {t_end}).")
+        p.t0, p.t_end = t0, t_end
+        p.y0 = _vector(y0, "y0")
+        p.n = n = p.y0.size
+        p.yp0 = np.zeros(n) if yp0 is None else _vector(yp0, "yp0", n)
+        if not (np.isscalar(rtol) and np.isfinite(rtol) and 0.0 < rtol < 1.0):
+            raise DAEError(f"rtol must be one number between 0 and 1; got {rtol!r}.")
+        a = np.asarray(atol, dtype=float)
+        if a.ndim == 0:
+            a = np.full(n, float(a))
+        if a.shape != (n,) or not np.all(np.isfinite(a)) or np.any(a <= 0.0):
+            raise DAEError(
+                f"atol must be a positive number or {n} positive numbers; got shape {a.shape} "
+                f"with minimum {np.min(a) if a.size else 'n/a'}."
+            )
+        p.atol = a
+        if max_order not in (1, 2, 3, 4, 5):
+            raise DAEError(f"max_order must be 1, 2, 3, 4 or 5; got {max_order!r}.")
+        if h0 is not None and not (np.isfinite(h0) and h0 > 0):
+            raise DAEError(f"h0 must be a positive number; got {h0!r}.")
+        if not max_step > 0:
+            raise DAEError(f"max_step must be positive; got {max_step!r}.")
+        p.algebraic = None
+        if algebraic is not None:
+            arr = np.asarray(algebraic)
+            mask = np.zeros(n, dtype=bool)
+            if arr.dtype == bool:
+                if arr.shape != (n,):
+                    raise DAEError(f"algebraic as a mask must have {n} entries; got {arr.shape}.")
+                mask = arr.copy()
+            elif arr.size:
+                if not np.issubdtype(arr.dtype, np.integer) or arr.min() < -n or arr.max() >= n:
+                    raise DAEError(
+                        f"algebraic must hold indices in 0..{n - 1} or a boolean mask; got {arr!r}."
+                    )
+                mask[arr] = True
+            p.algebraic = mask
+        p.sparsity = sparsity
+        if sparsity is not None and getattr(sparsity, "shape", None) != (n, n):
+            raise DAEError(
+                f"jac_sparsity must have shape ({n}, {n}); got {getattr(sparsity, 'shape', None)}."
+            )
+        p.tstops = sorted(float(s) for s in np.atleast_1d(np.asarray(tstops, dtype=float)))
+        if any(not np.isfinite(s) for s in p.tstops):
+            raise DAEError("tstops must be finite times.")
+        p.t_eval = None
+        if t_eval is not None:
+            te = np.asarray(t_eval, dtype=float).ravel()
+            if np.any(np.diff(te) < 0) or te.size == 0:
+                raise DAEError("t_eval must be a non-empty, increasing sequence of times.")
+            if te[0] < t0 or te[-1] > t_end:
+                raise DAEError(f"t_eval must lie within t_span [{t0}, {t_end}].")
+            p.t_eval = te
+        if names is not None and len(names) != n:
+            raise DAEError(f"variable_names has {len(names)} names for {n} unknowns.")
+        for i, g in enumerate(events):
+            SwitchFunction.wrap(g, i)
+        return p
+
+
+def _vector(v, what, n=None) -> np.ndarray:
+    try:
+        arr = np.array(v, dtype=float)
+    except (TypeError, ValueError):
+        raise DAEError(f"{what} must be an array of numbers.") from None
+    if arr.ndim != 1 or arr.size == 0:
+        raise DAEError(f"{what} must be a one-dimensional array; got shape {arr.shape}.")
+    if n is not None and arr.size != n:
+        raise DAEError(f"{what} has {arr.size} entries but y0 has {n}.")
+    if not np.all(np.isfinite(arr)):
+        bad = np.flatnonzero(~np.isfinite(arr))[:5].tolist()
+        raise DAEError(f"{what} holds NaN or inf at index(es) {bad}.")
+    return arr
+
+
+__all__ = ["solve_dae", "nd"]

@@ -1,0 +1,476 @@
+"""One BDF step at a time: the Nordsieck BDF stepper for F(t, y, y') = 0.
+
+``NordsieckBDF`` owns the Nordsieck array, the step size h and the order q.
+Its ``step`` advances the solution by one accepted step:
+
+1. predict: z_pred = P z (Pascal matrix, seed eq. 10.10);
+2. correct: modified Newton on G(y) = F(t_n, y, z_pred[1]/h + cj (y - y_pred)) = 0,
+   cj = l1(q) / h, with the iteration matrix dF/dy + cj dF/dy' kept (and its LU)
+   across steps while it converges (the DASSL/IDA convergence-rate test);
+3. error: Milne's estimate E = Delta / ((q + 1) l1 + 1), Delta = y_n - y_pred,
+   in the weighted RMS norm with weights 1 / (rtol |y| + atol);
+4. accept, and choose the next h and q: h_new = h * eta, eta = 1 / (c (d)^(1/(k+1)))
+   for k = q - 1, q, q + 1 (d the error estimate of order k, c a safety factor),
+   after q + 1 steps at constant h; on rejection shrink h (and the order).
+
+It knows nothing of events, output or stop times: the driver (``solve_dae``)
+handles those. The method is the fixed-coefficient ("interpolation") form of
+Gear's Nordsieck BDF as in LSODE; see ``nordsieck.py`` for the algebra.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dnasim.errors import DAEError, ResidualDomainError
+from dnasim.solver import nordsieck as nd
+from dnasim.solver.linear_algebra import IterationMatrix, SingularMatrixError
+
+EPS = float(np.finfo(float).eps)
+
+NEWTON_MAX_ITERS = 4  # IDA's maxcor
+NEWTON_RATE_MAX = 0.9  # IDA's RATEMAX: give up when the contraction is slower
+NEWTON_TOL = 0.33  # IDA's epcon: Newton converged when its error is 1/3 of the error test
+CJ_RATIO_REFRESH = 0.25  # IDA/DASSL XRATE: refresh J when cj/cj_J leaves [0.25, 4]
+MAX_NEWTON_FAILURES = 10
+MAX_ERROR_FAILURES = 10
+ETA_MAX = 10.0  # largest step growth after a successful step
+ETA_MAX_FIRST = 1.0e4 / 10.0  # growth allowed right after the (tiny) initial step
+ERROR_TARGET = 0.3  # the step-size formula aims at 0.3 of the tolerance (IDA: 0.5)
+ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
+
+
+@dataclass
+class SolverStats:
+    """Work counters, named as in the IDA/DASSL literature."""
+
+    steps: int = 0
+    rejected_error: int = 0
+    rejected_newton: int = 0
+    residual_evals: int = 0
+    jac_evals: int = 0
+    lu_decomps: int = 0
+    newton_iters: int = 0
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+@dataclass
+class StepFailure:
+    """Why the last attempt failed (used in the final error message)."""
+
+    reason: str = ""
+    bad_components: list = field(default_factory=list)
+
+
+class CountedResidual:
+    """Wraps the user's residual: counts calls, checks the returned shape."""
+
+    def __init__(self, residual, n, stats: SolverStats):
+        self.residual = residual
+        self.n = n
+        self.stats = stats
+
+    def __call__(self, t, y, yp):
+        self.stats.residual_evals += 1
+        f = self.residual(t, y, yp)
+        f = np.asarray(f, dtype=float)
+        if f.shape != (self.n,):
+            raise DAEError(
+                f"residual(t, y, yp) returned an array of shape {f.shape}; it must return "
+                f"shape ({self.n},), one equation per unknown."
+            )
+        return f
+
+
+class NordsieckBDF:
+    """The BDF integrator's state and its single-step method.
+
+    Parameters
+    ----------
+    residual : CountedResidual
+    t0 : float, start time [time unit of the problem]
+    y0, yp0 : consistent initial values and derivatives
+    rtol, atol : tolerances (atol scalar or per component)
+    max_order : 1..5
+    h0 : initial step size (None: estimated as in IDA)
+    max_step : largest step
+    error_mask : 1 for the components counted in the error test, 0 for excluded ones
+    matrix : IterationMatrix
+    fixed_order, fixed_step : for order-verification tests only: keep q and h constant
+    """
+
+    def __init__(
+        self,
+        residual: CountedResidual,
+        t0: float,
+        y0: np.ndarray,
+        yp0: np.ndarray,
+        *,
+        rtol: float,
+        atol: np.ndarray,
+        max_order: int,
+        h0: float | None,
+        max_step: float,
+        error_mask: np.ndarray,
+        matrix: IterationMatrix,
+        stats: SolverStats,
+        t_scale: float,
+        names=None,
+        fixed_order: bool = False,
+        fixed_step: bool = False,
+    ):
+        self.residual = residual
+        self.n = y0.size
+        self.rtol = rtol
+        self.atol = atol
+        self.max_order = max_order
+        self.max_step = max_step
+        self.error_mask = error_mask
+        self.matrix = matrix
+        self.stats = stats
+        self.t_scale = t_scale
+        self.names = names
+        self.fixed_order = fixed_order
+        self.fixed_step = fixed_step
+        self.z = np.zeros((nd.MAX_ORDER + 2, self.n))
+        self.newton_ss = 20.0  # IDA's initial convergence-rate factor
+        self.jacobian_current = False
+        self.failure = StepFailure()
+        self.restart(t0, y0, yp0, h0)
+
+    # -- starting and restarting -----------------------------------------------------------
+    def initial_step(self, y, yp) -> float:
+        """IDA's choice: 0.001 of the span, and no more than 0.5 / ||y'||."""
+        h = 1.0e-3 * self.t_scale
+        ypnorm = self.norm(yp, self.weights_for(y))
+        if ypnorm * h > 0.5:
+            h = 0.5 / ypnorm
+        return min(h, self.max_step)
+
+    def restart(self, t, y, yp, h0=None) -> None:
+        """(Re)start at order 1 from consistent (y, yp): after the start, an event or a tstop."""
+        self.t = float(t)
+        self.q = 1
+        self.h = float(h0) if h0 is not None else self.initial_step(y, yp)
+        self.z[:] = 0.0
+        self.z[0] = y
+        self.z[1] = self.h * yp
+        self.y = np.array(y, dtype=float)
+        self.yp = np.array(yp, dtype=float)
+        self.delta_prev = None
+        self.steps_at_this_h = 0
+        self.first_step = True
+        self.h_used, self.q_used = self.h, 1
+
+    def set_order(self, q: int, z: np.ndarray, h: float) -> None:
+        """Start from a given Nordsieck array (used by order-verification tests)."""
+        self.q = q
+        self.h = h
+        self.z[:] = 0.0
+        self.z[: q + 1] = z
+        self.first_step = False
+
+    # -- norms -----------------------------------------------------------------------------
+    def weights_for(self, y) -> np.ndarray:
+        return 1.0 / (self.rtol * np.abs(y) + self.atol)
+
+    @staticmethod
+    def norm(v, w) -> float:
+        return float(np.sqrt(np.mean((v * w) ** 2)))
+
+    # -- one step --------------------------------------------------------------------------
+    def step(self, t_stop: float | None = None, left_limit: bool = False) -> None:
+        """Take one accepted step, not passing t_stop; raise DAEError when that is impossible.
+
+        With ``left_limit``, a step that lands on t_stop evaluates the residual
+        an ulp before it: t_stop is a discontinuity and the step must see the
+        values from its left (a boundary that steps at t_stop, say).
+        """
+        weights = self.weights_for(self.y)
+        error_weights = weights * self.error_mask
+        n_newton_fail = 0
+        n_error_fail = 0
+        failed_this_step = False
+        while True:
+            q, h = self.q, self.h
+            if t_stop is not None and self.t + h >= t_stop - 4 * EPS * abs(t_stop):
+                new_h = t_stop - self.t
+                nd.rescale(self.z, q, new_h / h)
+                self.h = h = new_h
+                t_new = t_stop
+            else:
+                t_new = self.t + h
+            self._check_step_size(h, t_new)
+            z_pred = nd.predict(self.z, q)
+            cj = nd.harmonic(q) / h
+            t_res = np.nextafter(t_new, -np.inf) if (left_limit and t_new == t_stop) else t_new
+            converged, y, yp, delta = self._correct(t_res, z_pred, cj, h, weights)
+            if not converged:
+                self.stats.rejected_newton += 1
+                n_newton_fail += 1
+                failed_this_step = True
+                if n_newton_fail >= MAX_NEWTON_FAILURES:
+                    raise DAEError(self._failure_message(t_new, h, "Newton failed to converge"))
+                if self.fixed_step:
+                    raise DAEError(self._failure_message(t_new, h, "Newton failed (fixed step)"))
+                self._change_step(0.25)
+                continue
+            error = nd.error_coefficient(q) * self.norm(delta, error_weights)
+            if error > 1.0 and not self.fixed_step:
+                self.stats.rejected_error += 1
+                n_error_fail += 1
+                failed_this_step = True
+                if n_error_fail >= MAX_ERROR_FAILURES:
+                    raise DAEError(
+                        self._failure_message(
+                            t_new, h, "the error test failed repeatedly", delta * error_weights
+                        )
+                    )
+                self._after_error_failure(error, n_error_fail)
+                continue
+            self._accept(t_new, z_pred, delta, y, yp)
+            self.h_used, self.q_used = h, q
+            self._choose_next(error, delta, error_weights, failed_this_step)
+            return
+
+    def _check_step_size(self, h, t_new) -> None:
+        if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not np.isfinite(h):
+            raise DAEError(
+                self._failure_message(
+                    t_new, h, "the step size fell to round-off level (h = %.3g)" % h
+                )
+            )
+
+    def _accept(self, t_new, z_pred, delta, y, yp) -> None:
+        q = self.q
+        self.z[: q + 1] = z_pred + np.outer(nd.l_vector(q), delta)
+        self.t = t_new
+        self.y = y
+        self.yp = yp
+        self.stats.steps += 1
+        self.steps_at_this_h += 1
+        self.jacobian_current = False
+
+    # -- the corrector ---------------------------------------------------------------------
+    def _correct(self, t, z_pred, cj, h, weights):
+        """Modified Newton for the corrector; returns (converged, y, yp, Delta)."""
+        y_pred = z_pred[0]
+        yp_pred = z_pred[1] / h
+        for attempt in range(2):
+            y = y_pred.copy()
+            yp = yp_pred.copy()
+            try:
+                f = self.residual(t, y, yp)
+                if not np.all(np.isfinite(f)):
+                    self._note_nonfinite(t, f)
+                    return False, None, None, None
+                refresh = (
+                    self.matrix.matrix is None
+                    or not (CJ_RATIO_REFRESH < cj / self.matrix.cj < 1.0 / CJ_RATIO_REFRESH)
+                    or (attempt == 1)
+                )
+                if refresh:
+                    self._new_matrix(t, y, yp, f, cj, h, weights)
+                converged, y, yp = self._newton(t, y, yp, f, cj, weights)
+            except ResidualDomainError as exc:
+                self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
+                converged = False
+                if self.jacobian_current:
+                    return False, None, None, None
+                self.jacobian_current = False
+                continue
+            if converged:
+                return True, y, yp, y - y_pred
+            if self.jacobian_current:
+                return False, None, None, None
+            # Slow or failed with an old matrix: retry once with a fresh one.
+        return False, None, None, None
+
+    def _new_matrix(self, t, y, yp, f, cj, h, weights) -> None:
+        self.matrix.evaluate(t, y, yp, f, cj, h, weights)
+        self.stats.jac_evals += 1
+        self.stats.lu_decomps += 1
+        try:
+            self.matrix.factorize()
+        except SingularMatrixError as exc:
+            if self.matrix.nonfinite:
+                # A predicted state outside the residual's domain (a square root of a
+                # slightly negative value, say): recoverable by a smaller step.
+                raise ResidualDomainError(str(exc)) from None
+            raise DAEError(f"At t = {t:.10g}: {exc}") from None
+        self.jacobian_current = True
+        self.newton_ss = 20.0
+
+    def _newton(self, t, y, yp, f, cj, weights):
+        """Iterate y <- y - J^{-1} F with the DASSL/IDA rate test; returns (converged, y, yp)."""
+        ratio = cj / self.matrix.cj
+        scale = 2.0 / (1.0 + ratio) if ratio != 1.0 else 1.0
+        # A matrix built for another cj contracts at best by |1 - r| / (1 + r) (the
+        # dF/dy'-dominated limit); the stale rate from earlier steps must not claim better.
+        c = abs(1.0 - ratio) / (1.0 + ratio)
+        self.newton_ss = max(self.newton_ss, c / (1.0 - c))
+        first_norm = None
+        for m in range(NEWTON_MAX_ITERS):
+            self.stats.newton_iters += 1
+            d = self.matrix.solve(-f)
+            if scale != 1.0:
+                d *= scale
+            y = y + d
+            yp = yp + cj * d
+            dnorm = self.norm(d, weights)
+            if not np.isfinite(dnorm):
+                self.failure = StepFailure("the Newton update is not finite")
+                return False, y, yp
+            if m == 0:
+                first_norm = dnorm
+                if dnorm <= 1.0e-4 * NEWTON_TOL:
+                    return True, y, yp
+            else:
+                rate = (dnorm / first_norm) ** (1.0 / m) if first_norm > 0 else 0.0
+                if rate > NEWTON_RATE_MAX:
+                    self.failure = StepFailure(f"Newton converged too slowly (rate {rate:.2f})")
+                    return False, y, yp
+                self.newton_ss = rate / (1.0 - rate)
+            if self.newton_ss * dnorm <= NEWTON_TOL:
+                return True, y, yp
+            if m + 1 < NEWTON_MAX_ITERS:
+                f = self.residual(t, y, yp)
+                if not np.all(np.isfinite(f)):
+                    self._note_nonfinite(t, f)
+                    return False, y, yp
+        self.failure = StepFailure(f"Newton did not converge in {NEWTON_MAX_ITERS} iterations")
+        return False, y, yp
+
+    def _note_nonfinite(self, t, f) -> None:
+        bad = np.flatnonzero(~np.isfinite(f)).tolist()
+        self.failure = StepFailure(
+            f"the residual returned NaN or inf at t = {t:.10g} in equation(s) "
+            + ", ".join(str(i) for i in bad[:8]),
+            bad,
+        )
+
+    # -- step-size and order control -------------------------------------------------------
+    def _change_step(self, eta: float) -> None:
+        eta = min(eta, self.max_step / self.h)
+        nd.rescale(self.z, self.q, eta)
+        self.h *= eta
+        self.steps_at_this_h = 0
+
+    def _after_error_failure(self, error: float, n_fail: int) -> None:
+        q = self.q
+        if n_fail >= 3:
+            while self.q > 1 and not self.fixed_order:
+                nd.decrease_order(self.z, self.q)
+                self.q -= 1
+            self._change_step(0.25)
+            return
+        eta = _eta(error, q)
+        if q > 1 and not self.fixed_order:
+            err_down = nd.lower_order_error_coefficient(q) * self.norm(
+                self.z[q], self.weights_for(self.y) * self.error_mask
+            )
+            eta_down = _eta(err_down, q - 1)
+            if eta_down > eta:
+                nd.decrease_order(self.z, q)
+                self.q -= 1
+                eta = eta_down
+        eta = min(max(eta, 0.1), 0.9)
+        if n_fail == 2:
+            eta = min(eta, 0.25)
+        self._change_step(eta)
+
+    def _choose_next(self, error, delta, error_weights, failed_this_step) -> None:
+        """After an accepted step: the next step size and order.
+
+        eta_k = (err_k / ERROR_TARGET)^(-1/(k+1)) for the orders k = q - 1, q, q + 1
+        (the lower and higher ones only after q + 1 steps at this h, when the
+        differences they need are at this h). Then, as in IDA: grow only when the
+        step can at least double (at most ETA_MAX), shrink to [0.5, 0.9] when
+        eta < 1, and otherwise keep h, so the Nordsieck history is rescaled
+        seldom. Never grow right after a failure.
+        """
+        q = self.q
+        delta_prev = self.delta_prev
+        self.delta_prev = delta
+        if self.fixed_step:
+            return
+        if self.first_step:
+            # The initial step is deliberately tiny: let it grow fast, at order 1.
+            self.first_step = False
+            eta = min(_eta(error, 1), ETA_MAX_FIRST)
+            if eta >= 2.0 and not failed_this_step:
+                self._change_step(eta)
+            return
+        new_q, eta = q, _eta(error, q)
+        if self.steps_at_this_h >= q + 1 and not self.fixed_order:
+            if q > 1:
+                err_down = nd.lower_order_error_coefficient(q) * self.norm(
+                    self.z[q], error_weights
+                )
+                eta_down = _eta(err_down, q - 1)
+                if eta_down > eta:
+                    new_q, eta = q - 1, eta_down
+            if q < self.max_order and delta_prev is not None:
+                err_up = nd.higher_order_error_coefficient(q) * self.norm(
+                    delta - delta_prev, error_weights
+                )
+                eta_up = _eta(err_up, q + 1) / ORDER_UP_BIAS
+                if eta_up > eta:
+                    new_q, eta = q + 1, eta_up
+        if failed_this_step:
+            eta = min(eta, 1.0)
+        if eta >= 2.0:
+            eta = min(eta, ETA_MAX)
+        elif eta < 1.0:
+            eta = min(max(eta, 0.5), 0.9)
+        else:
+            eta = 1.0
+        if new_q == q + 1:
+            nd.increase_order(self.z, q, delta)
+        elif new_q == q - 1:
+            nd.decrease_order(self.z, q)
+        if new_q != q or eta != 1.0:
+            self.q = new_q
+            self._change_step(eta)
+
+    # -- dense output ----------------------------------------------------------------------
+    def interpolate(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """y and y' at t within the last step, from its Nordsieck polynomial.
+
+        The step-size and order choice after a step rescales the array; the
+        polynomial is the same, expressed with the new h.
+        """
+        s = (t - self.t) / self.h
+        return nd.interpolate(self.z, self.q, self.h, s)
+
+    def nordsieck_snapshot(self) -> tuple[float, float, int, np.ndarray]:
+        """(t_n, h, q, z[:q+1]): the polynomial of the last step, for dense output."""
+        return self.t, self.h, self.q, self.z[: self.q + 1].copy()
+
+    # -- messages --------------------------------------------------------------------------
+    def _failure_message(self, t, h, what, scaled_error=None) -> str:
+        msg = f"The integration stopped at t = {self.t:.10g} (trying a step to {t:.10g}, " + (
+            f"h = {h:.3g}): {what}"
+        )
+        if self.failure.reason:
+            msg += f"; last problem: {self.failure.reason}"
+        comps = self.failure.bad_components
+        if scaled_error is not None:
+            comps = np.argsort(-np.abs(scaled_error))[:5].tolist()
+        if comps:
+            msg += ". Components most involved: " + ", ".join(self._name(i) for i in comps[:5])
+        return msg + "."
+
+    def _name(self, i: int) -> str:
+        if self.names is not None and i < len(self.names):
+            return f"{self.names[i]} (index {i})"
+        return f"y[{i}]"
+
+
+def _eta(error: float, order: int) -> float:
+    """Step ratio that brings the local error of ``order`` to ERROR_TARGET."""
+    return (error / ERROR_TARGET + 1e-10) ** (-1.0 / (order + 1))

@@ -1,0 +1,1 @@
+"""Helpers for verifying dnasim against independent codes (dev dependencies only)."""
