@@ -64,7 +64,7 @@ VDP_Y0 = np.array([2.0, 0.0])
 
 
 def vdp_rhs(t, y):
-    return np.array([y[1], VDP_MU * ((1.0 - y[0] ** 2) * y[1] - y[0])])
+    return np.array([y[1], VDP_MU * (1.0 - y[0] ** 2) * y[1] - y[0]])
 
 
 # --- HIRES (Test Set for IVP Solvers) -----------------------------------------------------

@@ -1,0 +1,191 @@
+"""dnasim's BDF against SUNDIALS IDA (scikit-sundae) and scipy's BDF and Radau, in one run.
+
+Problems: Robertson and Chemical Akzo Nobel (DAEs), Van der Pol mu = 1000 and HIRES
+(ODEs, written as F = y' - f(t, y) for the DAE solvers), at rtol 1e-4, 1e-6, 1e-8.
+All solvers get the very same Python residual (or right-hand side) and tolerances,
+and every call of it is counted, finite-difference Jacobians included.
+
+Columns: significant correct digits at the end point (min over components larger
+than their atol of -log10 |err|/|ref|), steps, residual evaluations, Jacobians, LU
+factorisations, wall time (best of --repeat), and dnasim's time and evaluations
+divided by IDA's. References: the published values of the Test Set for IVP Solvers
+(Akzo, HIRES); for Robertson and Van der Pol, IDA/Radau at rtol 1e-12 in this run.
+
+    python benchmarks/solver_vs_peers.py [--repeat 3] [--rtols 1e-4 1e-6 1e-8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy
+from scipy.integrate import solve_ivp
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+
+from problems import (  # noqa: E402
+    AKZO_REF,
+    AKZO_Y0,
+    HIRES_REF,
+    HIRES_T_END,
+    HIRES_Y0,
+    ROBERTSON_Y0,
+    ROBERTSON_YP0,
+    VDP_Y0,
+    akzo,
+    as_residual,
+    hires_rhs,
+    robertson,
+    vdp_rhs,
+)
+
+from dnasim import solve_dae  # noqa: E402
+from dnasim.testing.ida import solve_with_ida  # noqa: E402
+
+
+class Counted:
+    def __init__(self, fn):
+        self.fn = fn
+        self.calls = 0
+
+    def __call__(self, *args):
+        self.calls += 1
+        return self.fn(*args)
+
+
+def problems():
+    rob_atol = np.array([1e-2, 1e-8, 1e-2])
+    return [
+        dict(name="Robertson", kind="dae", residual=robertson, y0=ROBERTSON_Y0,
+             yp0=ROBERTSON_YP0, t_end=4e10, algebraic=[2], atol_scale=rob_atol, ref=None),
+        dict(name="Akzo Nobel", kind="dae", residual=akzo, y0=AKZO_Y0, yp0=None,
+             t_end=180.0, algebraic=[5], atol_scale=np.ones(6), ref=AKZO_REF),
+        dict(name="Van der Pol mu=1000", kind="ode", rhs=vdp_rhs, y0=VDP_Y0, t_end=3000.0,
+             atol_scale=np.ones(2), ref=None),
+        dict(name="HIRES", kind="ode", rhs=hires_rhs, y0=HIRES_Y0, t_end=HIRES_T_END,
+             atol_scale=np.full(8, 1e-4), ref=HIRES_REF),
+    ]  # fmt: skip
+
+
+def digits(y, ref, atol):
+    mask = np.abs(ref) > atol
+    err = np.abs(y[mask] - ref[mask]) / np.abs(ref[mask])
+    return float(np.min(-np.log10(np.maximum(err, 1e-16))))
+
+
+def consistent_start(p):
+    """Consistent (y0, yp0) from dnasim's calc_initial, shared by the DAE solvers."""
+    residual = p.get("residual") or as_residual(p["rhs"])
+    r = solve_dae(residual, (0, p["t_end"] * 1e-12), p["y0"], p.get("yp0"),
+                  algebraic=p.get("algebraic"), rtol=1e-10, atol=1e-14)  # fmt: skip
+    return r.y[:, 0], r.yp[:, 0]
+
+
+def reference(p, y0, yp0):
+    if p["ref"] is not None:
+        return p["ref"]
+    if p["kind"] == "ode":
+        sol = solve_ivp(p["rhs"], (0, p["t_end"]), p["y0"], method="Radau", rtol=1e-12,
+                        atol=1e-12 * p["atol_scale"])  # fmt: skip
+        return sol.y[:, -1]
+    run = solve_with_ida(p["residual"], (0, p["t_end"]), y0, yp0, algebraic=p.get("algebraic"),
+                         rtol=1e-12, atol=1e-12 * p["atol_scale"], t_eval=[p["t_end"]])  # fmt: skip
+    return run.y[:, -1]
+
+
+def best_of(repeat, fn):
+    best, out = np.inf, None
+    for _ in range(repeat):
+        start = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - start)
+    return best, out
+
+
+def run_all(rtols, repeat):
+    rows = []
+    for p in problems():
+        residual = p.get("residual") or as_residual(p["rhs"])
+        y0, yp0 = consistent_start(p)
+        ref = reference(p, y0, yp0)
+        for rtol in rtols:
+            atol = rtol * p["atol_scale"]
+            sig_atol = atol
+
+            def ours():
+                counted = Counted(residual)
+                r = solve_dae(counted, (0, p["t_end"]), y0, yp0, algebraic=p.get("algebraic"),
+                              rtol=rtol, atol=atol, calc_initial=False, dense_output=False)  # fmt: skip
+                return r, counted.calls
+
+            wall, (r, calls) = best_of(repeat, ours)
+            s = r.stats
+            ours_row = dict(problem=p["name"], rtol=rtol, solver="dnasim",
+                            digits=digits(r.y[:, -1], ref, sig_atol), steps=s["steps"],
+                            fevals=calls, jacs=s["jac_evals"], lus=s["lu_decomps"], wall=wall)  # fmt: skip
+            rows.append(ours_row)
+
+            def ida():
+                return solve_with_ida(residual, (0, p["t_end"]), y0, yp0,
+                                      algebraic=p.get("algebraic"), rtol=rtol, atol=atol)  # fmt: skip
+
+            wall, run = best_of(repeat, ida)
+            s = run.stats
+            ida_row = dict(problem=p["name"], rtol=rtol, solver="IDA",
+                           digits=digits(run.y[:, -1], ref, sig_atol), steps=s["steps"],
+                           fevals=s["residual_evals"], jacs=s["jac_evals"], lus=s["lu_decomps"],
+                           wall=wall)  # fmt: skip
+            rows.append(ida_row)
+            ours_row["ratio_time"] = ours_row["wall"] / ida_row["wall"]
+            ours_row["ratio_fevals"] = ours_row["fevals"] / ida_row["fevals"]
+            if p["kind"] == "ode":
+                for method in ("BDF", "Radau"):
+
+                    def sp(method=method):
+                        counted = Counted(p["rhs"])
+                        sol = solve_ivp(counted, (0, p["t_end"]), p["y0"], method=method,
+                                        rtol=rtol, atol=atol)  # fmt: skip
+                        return sol, counted.calls
+
+                    wall, (sol, calls) = best_of(repeat, sp)
+                    rows.append(dict(problem=p["name"], rtol=rtol, solver=f"scipy {method}",
+                                     digits=digits(sol.y[:, -1], ref, sig_atol), steps=sol.t.size - 1,
+                                     fevals=calls, jacs=sol.njev, lus=sol.nlu, wall=wall))  # fmt: skip
+    return rows
+
+
+def table(rows) -> str:
+    head = (f"{'problem':<20} {'rtol':>6} {'solver':<12} {'digits':>6} {'steps':>6} "
+            f"{'F evals':>8} {'Jacs':>5} {'LUs':>5} {'wall [s]':>9} {'t/IDA':>6} {'F/IDA':>6}")  # fmt: skip
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        ratio_t = f"{r['ratio_time']:.2f}" if "ratio_time" in r else ""
+        ratio_f = f"{r['ratio_fevals']:.2f}" if "ratio_fevals" in r else ""
+        lines.append(
+            f"{r['problem']:<20} {r['rtol']:>6.0e} {r['solver']:<12} {r['digits']:>6.2f} "
+            f"{r['steps']:>6} {r['fevals']:>8} {r['jacs']:>5} {r['lus']:>5} {r['wall']:>9.4f} "
+            f"{ratio_t:>6} {ratio_f:>6}"
+        )
+    return "\n".join(lines)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--rtols", type=float, nargs="+", default=[1e-4, 1e-6, 1e-8])
+    args = parser.parse_args()
+    rows = run_all(args.rtols, args.repeat)
+    import sksundae
+
+    print(f"# solver_vs_peers, {datetime.date.today().isoformat()}, numpy {np.__version__}, "
+          f"scipy {scipy.__version__}, scikit-sundae {sksundae.__version__}")  # fmt: skip
+    print(table(rows))
+
+
+if __name__ == "__main__":
+    main()
