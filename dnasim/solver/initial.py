@@ -74,6 +74,14 @@ def make_consistent(
                 )
             ) from None
         du = matrix.solve(-f)
+        full_update = np.sqrt(np.mean((du * unknown_weights) ** 2))
+        if full_update <= TOLERANCE:
+            # Converged: the residual is at round-off level and the last correction tiny.
+            # (A line search is no use there: ||F|| is round-off noise.)
+            y = y + du * alg
+            yp = yp + du * diff
+            matrix.matrix = None
+            return y, yp
         f_norm = np.linalg.norm(f)
         step = 1.0
         for _ in range(12):

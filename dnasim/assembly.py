@@ -1,0 +1,333 @@
+"""Assembly of a plant into one DAE F(t, y, y') = 0.
+
+Global vector y:
+  * for each node (in connection order): p [Pa], h [J/kg] (names "node.p", "node.h");
+  * for each component (in the order added): its variables ("comp.var",
+    vector elements "comp.var[i]").
+Signal inputs are not variables: they alias the linked output variable.
+
+Global equations F:
+  * each component's equations, in the order it declares them (rows "comp.eq");
+  * one mass balance per node (rows "node.mass"):
+        sum of flows of outlet ports at the node - sum of flows of inlet ports = 0
+    (flows are positive in the design direction). The node enthalpy is fixed by the
+    one component whose outlet port is at the node.
+
+Sparsity: from the components' ``Equation`` declarations (``y`` and ``yp``
+lists); ``pattern_y`` (dF/dy), ``pattern_yp`` (dF/dy') and their union
+``jac_sparsity``. A variable is differential when some equation declares its
+derivative; the others are algebraic.
+
+Tolerances: ``atol_vector(atol, y0)`` gives atol_i = atol * scale_i with
+scale_i = max(declared nominal_i, |y0_i|): a relative tolerance on each
+variable's own magnitude (p ~ 1e5 Pa gets 1e5 times the absolute tolerance of a
+valve opening ~ 1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from dnasim.components.base import LocalVector
+from dnasim.errors import PlantError, ResidualDomainError
+
+NODE_P_NOMINAL = 1e5  # Pa
+NODE_H_NOMINAL = 1e5  # J/kg
+
+
+class ComponentBlock:
+    """A component's place in the global system."""
+
+    def __init__(self, comp, gidx, index, eq_slice, local_names):
+        self.comp = comp
+        self.gidx = gidx  # local position -> global variable index
+        self.index = index  # local name -> local position (int) or slice
+        self.eq_slice = eq_slice
+        self.local_names = local_names
+
+    def local(self, v):
+        return LocalVector(v[self.gidx], self.index)
+
+
+class PlantEvent:
+    """A component switch function seen by the solver: g(t, y, yp) on global vectors."""
+
+    def __init__(self, block: ComponentBlock, switch):
+        self.block = block
+        self.switch = switch
+        self.component = block.comp.name
+        self.name = f"{block.comp.name}.{switch.name}"
+        self.direction = switch.direction
+        self.terminal = False
+
+    def __call__(self, t, y, yp):
+        b = self.block
+        return float(self.switch.function(t, b.local(y), b.local(yp)))
+
+    def action(self, t, y, yp):
+        if self.switch.action is not None:
+            b = self.block
+            self.switch.action(t, b.local(y), b.local(yp))
+        return None
+
+
+class AssembledDAE:
+    """The plant as a DAE: residual, sparsity, masks, events, tstops, names."""
+
+    def __init__(self, plant):
+        self.plant = plant
+        self._build()
+
+    # ------------------------------------------------------------------ build
+    def _build(self):
+        plant = self.plant
+        names, units, nominal, owner, accumulator = [], [], [], [], []
+        self.node_index = {}
+        for node in plant.node_names():
+            self.node_index[node] = len(names)
+            names += [f"{node}.p", f"{node}.h"]
+            units += ["Pa", "J/kg"]
+            nominal += [NODE_P_NOMINAL, NODE_H_NOMINAL]
+            owner += [node, node]
+            accumulator += [False, False]
+        self.n_node_vars = len(names)
+
+        # own variables of each component
+        own = {}
+        for comp in plant.components.values():
+            table = {}
+            for var in comp.variables():
+                if var.size is None:
+                    table[var.name] = len(names)
+                    names.append(f"{comp.name}.{var.name}")
+                    units.append(var.unit)
+                    nominal.append(var.nominal)
+                    owner.append(comp.name)
+                    accumulator.append(var.accumulator)
+                else:
+                    start = len(names)
+                    for i in range(var.size):
+                        table[f"{var.name}[{i}]"] = len(names)
+                        names.append(f"{comp.name}.{var.name}[{i}]")
+                        units.append(var.unit)
+                        nominal.append(var.nominal)
+                        owner.append(comp.name)
+                        accumulator.append(var.accumulator)
+                    table[var.name] = slice(start, start + var.size)
+            own[comp.name] = table
+
+        # local layouts
+        self.blocks = []
+        eq_names, eq_owner, rows_y, rows_yp = [], [], [], []
+        for comp in plant.components.values():
+            gidx, index, local_names = [], {}, []
+
+            def add_local(name, g):
+                index[name] = len(gidx)
+                gidx.append(g)
+                local_names.append(name)
+
+            for port in comp.fluid_ports():
+                node = plant.connections[(comp.name, port.name)]
+                k = self.node_index[node]
+                add_local(f"{port.name}.p", k)
+                add_local(f"{port.name}.h", k + 1)
+            table = own[comp.name]
+            for vname, g in table.items():
+                if isinstance(g, slice):
+                    continue
+                add_local(vname, g)
+            for vname, g in table.items():
+                if isinstance(g, slice):
+                    first = index[f"{vname}[0]"]
+                    index[vname] = slice(first, first + (g.stop - g.start))
+            for sig in comp.signal_inputs():
+                src_comp, src_port = plant.links[(comp.name, sig.name)]
+                src = plant.components[src_comp]
+                var = next(s.variable for s in src.signal_outputs() if s.name == src_port)
+                add_local(sig.name, own[src_comp][var])
+            eqs = comp.equations()
+            start = len(eq_names)
+            for eq in eqs:
+                eq_names.append(f"{comp.name}.{eq.name}")
+                eq_owner.append(comp.name)
+                try:
+                    rows_y.append([gidx[_local(index, r, comp, eq)] for r in eq.y])
+                    rows_yp.append([gidx[_local(index, r, comp, eq)] for r in eq.yp])
+                except KeyError as err:  # pragma: no cover - _local raises PlantError
+                    raise PlantError(str(err)) from None
+            self.blocks.append(
+                ComponentBlock(
+                    comp,
+                    np.array(gidx, dtype=np.intp),
+                    index,
+                    slice(start, len(eq_names)),
+                    local_names,
+                )
+            )
+
+        # node mass balances
+        self.node_eq_start = len(eq_names)
+        node_rows, node_cols, node_vals = [], [], []
+        for j, node in enumerate(plant.node_names()):
+            eq_names.append(f"{node}.mass")
+            eq_owner.append(node)
+            cols = []
+            for comp_name, port in plant.ports_at(node):
+                if port.role == "probe":
+                    continue
+                b = self.block(comp_name)
+                g = b.gidx[b.index[port.flow]]
+                node_rows.append(j)
+                node_cols.append(g)
+                node_vals.append(1.0 if port.role == "outlet" else -1.0)
+                cols.append(g)
+            rows_y.append(cols)
+            rows_yp.append([])
+        n = len(names)
+        n_nodes = len(plant.node_names())
+        self.node_matrix = sp.csr_matrix((node_vals, (node_rows, node_cols)), shape=(n_nodes, n))
+
+        self.n = n
+        self.n_equations = len(eq_names)
+        self.names = names
+        self.index = {nm: i for i, nm in enumerate(names)}
+        self.units = dict(zip(names, units))
+        self.nominal = np.array(nominal, dtype=float)
+        self.var_owner = owner
+        self.accumulator = np.array(accumulator, dtype=bool)
+        self.eq_names = eq_names
+        self.eq_owner = eq_owner
+        self.rows_y = rows_y
+        self.rows_yp = rows_yp
+        self.pattern_y = _pattern(rows_y, self.n_equations, n)
+        self.pattern_yp = _pattern(rows_yp, self.n_equations, n)
+        self.differential = np.asarray(self.pattern_yp.sum(axis=0)).ravel() > 0
+        self.algebraic = ~self.differential
+        self._checked_lengths = False
+
+        self.events = [PlantEvent(b, sw) for b in self.blocks for sw in b.comp.switches()]
+
+    def block(self, comp_name) -> ComponentBlock:
+        for b in self.blocks:
+            if b.comp.name == comp_name:
+                return b
+        raise KeyError(comp_name)
+
+    # --------------------------------------------------------------- numerics
+    @property
+    def jac_sparsity(self):
+        """Union of the dF/dy and dF/dy' patterns (scipy.sparse CSR, 0/1)."""
+        if self.n != self.n_equations:
+            raise PlantError(f"{self.n_equations} equations for {self.n} unknowns")
+        pat = (self.pattern_y + self.pattern_yp).tocsr()
+        pat.data[:] = 1.0
+        return pat
+
+    def residual(self, t, y, yp):
+        """F(t, y, y') for the whole plant (length n)."""
+        F = np.empty(self.n_equations)
+        for b in self.blocks:
+            x = LocalVector(y[b.gidx], b.index)
+            xp = LocalVector(yp[b.gidx], b.index)
+            r = b.comp.residual(t, x, xp)
+            if not self._checked_lengths:
+                nr = np.size(r)
+                ne = b.eq_slice.stop - b.eq_slice.start
+                if nr != ne:
+                    raise PlantError(
+                        f"component '{b.comp.name}' ({type(b.comp).__name__}) returned {nr} residuals "
+                        f"but declares {ne} equations"
+                    )
+            F[b.eq_slice] = r
+        F[self.node_eq_start :] = self.node_matrix @ y
+        self._checked_lengths = True
+        if not np.all(np.isfinite(F)):
+            bad = np.flatnonzero(~np.isfinite(F))[:3]
+            raise ResidualDomainError(
+                "residual not finite in "
+                + ", ".join(self.eq_names[i] for i in bad)
+                + f" at t = {t:g}"
+            )
+        return F
+
+    def atol_vector(self, atol: float, y0) -> np.ndarray:
+        """atol_i = atol * max(nominal_i, |y0_i|)."""
+        return atol * np.maximum(self.nominal, np.abs(np.asarray(y0, dtype=float)))
+
+    def tstops(self, t0: float, t_end: float) -> list[float]:
+        """Breakpoints of all time-function parameters inside (t0, t_end)."""
+        out = set()
+        for comp in self.plant.components.values():
+            for b in comp.breakpoints():
+                if t0 < b < t_end:
+                    out.add(float(b))
+        return sorted(out)
+
+    # ---------------------------------------------------------------- outputs
+    def output_names(self) -> list[str]:
+        """Names of one output row: every variable, node temperatures, derived outputs."""
+        if not hasattr(self, "_output_names"):
+            names = list(self.names)
+            units = dict(self.units)
+            for node in self.plant.node_names():
+                names.append(f"{node}.T")
+                units[f"{node}.T"] = "K"
+            for b in self.blocks:
+                for o in b.comp.outputs():
+                    nm = f"{b.comp.name}.{o.name}"
+                    names.append(nm)
+                    units[nm] = o.unit
+            self._output_names, self._output_units = names, units
+        return list(self._output_names)
+
+    def output_units(self) -> dict:
+        self.output_names()
+        return dict(self._output_units)
+
+    def output_row(self, t, y, yp) -> np.ndarray:
+        """One output row (order of ``output_names()``) from (t, y, y')."""
+        row = [np.asarray(y, dtype=float)]
+        node_T = []
+        for node in self.plant.node_names():
+            k = self.node_index[node]
+            medium = self.plant.node_medium(node)
+            try:
+                node_T.append(
+                    medium.state(float(y[k]), float(y[k + 1])).T if medium is not None else np.nan
+                )
+            except ResidualDomainError:
+                node_T.append(np.nan)
+        row.append(np.array(node_T))
+        for b in self.blocks:
+            if b.comp.outputs():
+                vals = b.comp.output_values(t, b.local(y), b.local(yp))
+                row.append(np.asarray(vals, dtype=float))
+        return np.concatenate(row)
+
+
+def _local(index, ref, comp, eq):
+    try:
+        k = index[ref]
+    except KeyError:
+        raise PlantError(
+            f"component '{comp.name}' ({type(comp).__name__}): equation '{eq.name}' refers to "
+            f"'{ref}', which is not one of its variables or port values"
+        ) from None
+    if isinstance(k, slice):
+        raise PlantError(
+            f"component '{comp.name}': equation '{eq.name}' refers to the whole vector '{ref}'; name elements"
+        )
+    return k
+
+
+def _pattern(rows, n_rows, n_cols):
+    r, c = [], []
+    for i, cols in enumerate(rows):
+        r.extend([i] * len(cols))
+        c.extend(cols)
+    m = sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(n_rows, n_cols))
+    m.sum_duplicates()
+    m.data[:] = 1.0
+    return m

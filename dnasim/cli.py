@@ -1,0 +1,408 @@
+"""The ``dnasim`` command: run, check, components, plot.
+
+Exit codes: 0 success; 1 the simulation failed or was interrupted (results up to
+that time are on disk); 2 bad input (plant file, options, paths).
+
+Heavy modules (numpy, the solver, CoolProp, matplotlib) are imported inside the
+commands, so ``dnasim --help`` starts fast.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import traceback
+from pathlib import Path
+
+import click
+
+EXIT_OK = 0
+EXIT_SIMULATION = 1
+EXIT_INPUT = 2
+
+CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+class InputError(click.ClickException):
+    """Bad input: printed as one message without a traceback, exit code 2."""
+
+    exit_code = EXIT_INPUT
+
+    def show(self, file=None):
+        click.echo(f"dnasim: error: {self.format_message()}", err=True)
+
+
+class SimulationFailed(click.ClickException):
+    exit_code = EXIT_SIMULATION
+
+    def show(self, file=None):
+        click.echo(f"dnasim: {self.format_message()}", err=True)
+
+
+def _debug() -> bool:
+    return bool(os.environ.get("DNASIM_DEBUG"))
+
+
+def _internal(exc: BaseException, exit_code: int) -> click.ClickException:
+    """An unexpected exception: a one-line message (traceback with DNASIM_DEBUG=1)."""
+    if _debug():
+        traceback.print_exc()
+    err = SimulationFailed(
+        f"internal error: {type(exc).__name__}: {exc} "
+        "(this is a bug in dnasim; set DNASIM_DEBUG=1 for the traceback)"
+    )
+    err.exit_code = exit_code
+    return err
+
+
+def _load(plant_file: str):
+    from dnasim.errors import PlantError
+    from dnasim.plantfile import load
+
+    try:
+        return load(plant_file)
+    except PlantError as exc:
+        raise InputError(str(exc)) from None
+    except click.ClickException:
+        raise
+    except Exception as exc:  # a bug, but never a traceback for the user
+        raise _internal(exc, EXIT_INPUT) from None
+
+
+def _parse_option_quantity(value, unit: str, option: str) -> float | None:
+    if value is None:
+        return None
+    from dnasim.units import UnitError, to_si
+
+    try:
+        v = float(value)
+    except ValueError:
+        v = value
+    try:
+        x = to_si(v, unit)
+    except UnitError as exc:
+        raise InputError(f"option {option}: {exc}") from None
+    if not x > 0:
+        raise InputError(f"option {option}: must be positive (got {value})")
+    return x
+
+
+def _split_patterns(values) -> list[str]:
+    out = []
+    for v in values or ():
+        for part in v.replace(",", " ").split():
+            if part:
+                out.append(part)
+    return out
+
+
+@click.group(context_settings=CONTEXT_SETTINGS)
+@click.version_option(package_name="dnasim", prog_name="dnasim")
+def main():
+    """dnasim: dynamic simulation of energy systems (plants of pipes, valves,
+    attemperators and controllers), solved as index-1 DAEs by a Nordsieck BDF.
+
+    \b
+    Plant files are TOML; see `dnasim components` for the component library
+    and docs/plant_files.md for the schema.
+    \b
+    Exit codes: 0 success, 1 simulation failed or interrupted (results up to
+    that time are written), 2 bad input.
+    """
+
+
+# --------------------------------------------------------------------------- run
+
+
+class _Terminate(BaseException):
+    """Raised from the SIGTERM handler so the run stops like on Ctrl-C."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminate()
+
+
+@main.command(context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+@click.option(
+    "-o",
+    "--output",
+    "out_dir",
+    default=None,
+    metavar="DIR",
+    help="Directory for results.csv, events.csv, steps.csv and plots "
+    "[default: results/<plant file name>].",
+)
+@click.option("--t-end", default=None, metavar="T", help='End time, e.g. 900 or "15 min".')
+@click.option("--rtol", type=float, default=None, metavar="R", help="Relative tolerance.")
+@click.option("--atol", type=float, default=None, metavar="A", help="Absolute tolerance.")
+@click.option("--max-order", type=click.IntRange(1, 5), default=None, help="Maximum BDF order.")
+@click.option(
+    "--output-interval", default=None, metavar="DT", help='Time between CSV rows, e.g. "1 s".'
+)
+@click.option("--plot", is_flag=True, help="Write PNG plots (variables; step size and order).")
+@click.option(
+    "--vars",
+    "var_patterns",
+    multiple=True,
+    metavar="PATTERN",
+    help="Variables to plot (implies --plot): names or shell patterns (pipe1.*, *.T_out); "
+    "repeat the option or separate with commas. Default: temperatures and controller outputs.",
+)
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
+def run(
+    plant_file,
+    out_dir,
+    t_end,
+    rtol,
+    atol,
+    max_order,
+    output_interval,
+    plot,
+    var_patterns,
+    quiet,
+):
+    """Simulate PLANT.toml and write results.csv, events.csv, steps.csv (and plots) to DIR.
+
+    results.csv is written while the integration runs and flushed periodically: a
+    failure or Ctrl-C leaves a valid CSV up to the time reached.
+    """
+    loaded = _load(plant_file)
+    sim = loaded.simulation
+    x = _parse_option_quantity(t_end, "s", "--t-end")
+    if x is not None:
+        if x <= sim.t_start:
+            raise InputError(f"option --t-end: must be after the start time {sim.t_start:g} s")
+        sim.t_end = x
+    if rtol is not None:
+        if not 0 < rtol < 1:
+            raise InputError(f"option --rtol: must be > 0 and < 1 (got {rtol})")
+        sim.rtol = rtol
+    if atol is not None:
+        if not atol > 0:
+            raise InputError(f"option --atol: must be > 0 (got {atol})")
+        sim.atol = atol
+    if max_order is not None:
+        sim.max_order = max_order
+    dt = _parse_option_quantity(output_interval, "s", "--output-interval")
+    if dt is not None:
+        sim.output_interval = dt
+    patterns = _split_patterns(var_patterns)
+    plot = plot or bool(patterns)
+
+    out = Path(out_dir) if out_dir else Path("results") / Path(plant_file).stem
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(
+            f"cannot create the output directory {out}: {exc.strerror or exc}"
+        ) from None
+    if not os.access(out, os.W_OK):
+        raise InputError(f"the output directory {out} is not writable")
+
+    from dnasim.runner import RunOutcome, run_plant
+
+    show_progress = not quiet and sys.stdout.isatty()
+    old = signal.getsignal(signal.SIGTERM)
+    try:
+        signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread (e.g. inside a test runner thread)
+        old = None
+    try:
+        outcome: RunOutcome = run_plant(
+            loaded,
+            out,
+            progress=show_progress,
+            interrupt_types=(KeyboardInterrupt, _Terminate),
+        )
+    except click.ClickException:
+        raise
+    except (KeyboardInterrupt, _Terminate):  # outside the integration itself
+        raise SimulationFailed(
+            f"interrupted while starting or finishing the run; {out / 'results.csv'} holds "
+            "whatever rows were computed"
+        ) from None
+    except Exception as exc:
+        from dnasim.errors import PlantError
+
+        if isinstance(exc, PlantError):
+            raise InputError(str(exc)) from None
+        raise _internal(exc, EXIT_SIMULATION) from None
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+
+    if plot and outcome.t_reached is not None:
+        from dnasim.runner import write_plots
+
+        try:
+            files = write_plots(outcome, out, patterns)
+        except Exception as exc:  # a plot must not hide the result of the run
+            click.echo(f"dnasim: warning: plotting failed: {type(exc).__name__}: {exc}", err=True)
+            files = []
+        if not quiet:
+            for f in files:
+                click.echo(f"wrote {f}")
+    if not quiet or not outcome.success:
+        click.echo(outcome.summary())
+    if not outcome.success:
+        raise SimulationFailed(outcome.failure_message())
+
+
+# --------------------------------------------------------------------------- check
+
+
+@main.command(context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+def check(plant_file):
+    """Validate PLANT.toml and analyse its structure (equations, unknowns, states,
+    matching) without simulating. Exits 2 on any problem."""
+    from dnasim.errors import DnasimError, PlantError
+
+    loaded = _load(plant_file)
+    try:
+        report = loaded.plant.check()
+    except PlantError as exc:
+        raise InputError(f"{plant_file}: {exc}") from None
+    except DnasimError as exc:
+        raise InputError(f"{plant_file}: structural analysis failed: {exc}") from None
+    except Exception as exc:
+        raise _internal(exc, EXIT_INPUT) from None
+    from dnasim.runner import describe_report
+
+    text, ok = describe_report(report)
+    if ok:
+        # build the DAE too (media, sparsity, events): still no numerics
+        assemble = getattr(loaded.plant, "assemble", None)
+        try:
+            if assemble is not None:
+                assemble()
+        except PlantError as exc:
+            text += f"\nerror: {exc}"
+            ok = False
+        except DnasimError as exc:
+            text += f"\nerror: the plant cannot be assembled: {exc}"
+            ok = False
+        except Exception as exc:
+            raise _internal(exc, EXIT_INPUT) from None
+    click.echo(
+        f"{plant_file}: plant '{loaded.spec.name}', {len(loaded.spec.components)} components"
+    )
+    click.echo(text)
+    if not ok:
+        raise InputError(f"{plant_file}: the structural analysis found problems (see above)")
+    click.echo("ok")
+
+
+# --------------------------------------------------------------------------- components
+
+
+@main.command(context_settings=CONTEXT_SETTINGS)
+@click.argument("name", required=False)
+def components(name):
+    """List the component library; with NAME, one component's ports, parameters
+    (units, defaults, ranges) and equations."""
+    from dnasim.plantfile import _registry, _suggest, component_info
+    from dnasim.runner import format_component
+
+    try:
+        registry = _registry()
+    except Exception as exc:
+        raise _internal(exc, EXIT_INPUT) from None
+    if name is None:
+        click.echo("Component types (dnasim components NAME for details):\n")
+        width = max((len(n) for n in registry), default=0)
+        for tname in sorted(registry):
+            info = component_info(registry[tname])
+            first = info["doc"].splitlines()[0] if info["doc"] else ""
+            click.echo(f"  {tname:<{width}}  {first}")
+        click.echo("\nTime functions for boundary values and set points (see docs/plant_files.md):")
+        click.echo('  { type = "constant", value = V }')
+        click.echo('  { type = "step", t0 = T, before = V, after = V }')
+        click.echo('  { type = "ramp", t0 = T, t1 = T, start = V, end = V }')
+        click.echo('  { type = "table", times = [T, ...], values = [V, ...] }')
+        click.echo('  { type = "sine", mean = V, amplitude = dV, period = T, phase = rad }')
+        return
+    cls = registry.get(name)
+    if cls is None:
+        lower = {k.lower(): k for k in registry}
+        if name.lower() in lower:
+            cls = registry[lower[name.lower()]]
+        else:
+            raise InputError(
+                f"unknown component type {name!r}{_suggest(name, registry)} "
+                f"(known: {', '.join(sorted(registry))})"
+            )
+    click.echo(format_component(component_info(cls)))
+
+
+# --------------------------------------------------------------------------- plot
+
+
+@main.command(name="plot", context_settings=CONTEXT_SETTINGS)
+@click.argument("results_csv", metavar="RESULTS.csv", type=click.Path(dir_okay=False))
+@click.argument("patterns", nargs=-1, metavar="[PATTERN]...")
+@click.option("--vars", "var_patterns", multiple=True, metavar="PATTERN", help="Variables to plot.")
+@click.option(
+    "-o",
+    "--output",
+    "out_file",
+    default=None,
+    metavar="FILE.png",
+    help="Output image [default: next to the CSV, plot_<vars>.png].",
+)
+def plot_cmd(results_csv, patterns, var_patterns, out_file):
+    """Re-plot saved results: the variables matching the patterns over time, and,
+    when steps.csv is next to the CSV, step size and order over time."""
+    from dnasim.output import read_results_csv, select_variables
+
+    path = Path(results_csv)
+    try:
+        names, units, data = read_results_csv(path)
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except (OSError, ValueError, StopIteration) as exc:
+        raise InputError(f"{path}: not a dnasim results CSV: {exc}") from None
+    if not names or names[0] != "time":
+        raise InputError(f"{path}: the first column must be 'time [s]'")
+    pats = _split_patterns(var_patterns) + list(patterns)
+    variables = [n for n in names[1:]]
+    chosen = select_variables(variables, pats) if pats else _default_vars(variables)
+    if not chosen:
+        raise InputError(
+            f"{path}: no variable matches {' '.join(pats)}; variables: "
+            + ", ".join(variables[:20])
+            + (" ..." if len(variables) > 20 else "")
+        )
+    from dnasim.output import plot_steps, plot_variables
+
+    target = Path(out_file) if out_file else path.with_name("plot_variables.png")
+    plot_variables(data["time"], data, chosen, units, target, title=str(path))
+    click.echo(f"wrote {target}")
+    steps = path.with_name("steps.csv")
+    if steps.exists() and out_file is None:
+        import csv
+
+        try:
+            with open(steps, newline="") as f:
+                rows = [
+                    (float(r["time"]), float(r["step_size"]), float(r["order"]))
+                    for r in csv.DictReader(f)
+                ]
+        except (OSError, ValueError, KeyError):
+            rows = []
+        if rows:
+            target2 = path.with_name("plot_steps.png")
+            plot_steps(rows, target2, title=str(steps))
+            click.echo(f"wrote {target2}")
+
+
+def _default_vars(names):
+    from dnasim.runner import default_plot_variables
+
+    return default_plot_variables(names)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

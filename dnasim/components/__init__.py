@@ -1,0 +1,50 @@
+"""Component library. Every subclass of ``Component`` registers itself in ``REGISTRY``.
+
+See ``dnasim.components.base`` for the contract a component fulfils.
+"""
+
+from dnasim.components.attemperator import Attemperator
+from dnasim.components.base import (
+    REGISTRY,
+    REQUIRED,
+    Component,
+    Equation,
+    FluidPort,
+    LocalVector,
+    Output,
+    Param,
+    SignalPort,
+    Switch,
+    Variable,
+)
+from dnasim.components.boundaries import MassFlowBoundary, PressureBoundary
+from dnasim.components.controller import PIController
+from dnasim.components.heat_exchanger import HeatExchanger
+from dnasim.components.junctions import Mixer, Splitter
+from dnasim.components.pipe import Pipe
+from dnasim.components.sensor import TemperatureSensor
+from dnasim.components.valve import Valve
+
+__all__ = [
+    "REGISTRY",
+    "REQUIRED",
+    "Component",
+    "Equation",
+    "FluidPort",
+    "LocalVector",
+    "Output",
+    "Param",
+    "SignalPort",
+    "Switch",
+    "Variable",
+    "Attemperator",
+    "HeatExchanger",
+    "MassFlowBoundary",
+    "Mixer",
+    "PIController",
+    "Pipe",
+    "PressureBoundary",
+    "Splitter",
+    "TemperatureSensor",
+    "Valve",
+]

@@ -1,0 +1,461 @@
+"""Declarations every component is built from, and the ``Component`` base class.
+
+A component declares, in plain Python:
+
+* ``PARAMS``: ``Param`` objects (name, SI unit, default, doc, bounds, whether the
+  value may be a function of time);
+* fluid ports (``FluidPort``): a fluid port is bound to a network node that carries
+  the pressure ``p`` [Pa] and the specific enthalpy ``h`` [J/kg]; the component
+  carries the mass flow through the port in one of its own variables;
+* signal ports (``SignalPort``): a signal input reads one scalar owned by another
+  component; a signal output exposes one of the component's own variables;
+* variables (``Variable``): name, unit, nominal scale, optional vector size;
+* equations (``Equation``): each one names the local variables it touches and the
+  local variables whose time derivatives it touches. The global sparsity pattern
+  of the DAE is built from these declarations alone;
+* ``residual(t, x, xp)``: the residuals, in the order of ``equations()``;
+* switch functions (``Switch``) with their actions, for discrete state;
+* ``initial_guess``: values for its variables before initialisation.
+
+Local variable names seen by a component:
+
+* ``"<port>.p"`` and ``"<port>.h"`` for each fluid port (the node's p and h);
+* its own variables, a vector variable ``"M"`` of size n has elements
+  ``"M[0]"`` ... ``"M[n-1]"``; ``x["M"]`` returns the whole vector;
+* ``"<signal input>"`` for each signal input (an alias of another component's
+  output variable).
+
+The framework (``dnasim.assembly``) maps these local names into the global
+vector. Components never see the solver.
+
+Design-direction convention: a fluid port is an ``"inlet"`` or an ``"outlet"``.
+Flow variables are positive in the design direction (into the component at an
+inlet, out of it at an outlet). The component that owns the outlet port attached
+to a node supplies the equation that fixes that node's enthalpy (upwind in the
+design direction); every node has exactly one such outlet. Reverse flow is
+allowed in the momentum equations (valve, pipe friction) but enthalpy is always
+taken from the design upstream side.
+
+Adding a component: subclass ``Component`` in one file, import it in
+``dnasim/components/__init__.py`` (or anywhere before use); the subclass
+registers itself in ``REGISTRY`` under its class name.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from dnasim.errors import PlantError
+from dnasim.timefunctions import TimeFunction, as_time_function
+
+__all__ = [
+    "REQUIRED",
+    "REGISTRY",
+    "Param",
+    "FluidPort",
+    "SignalPort",
+    "Variable",
+    "Equation",
+    "Switch",
+    "Output",
+    "LocalVector",
+    "Component",
+]
+
+
+class _Required:
+    def __repr__(self):
+        return "REQUIRED"
+
+
+REQUIRED = _Required()
+
+#: type name -> component class, filled automatically by ``Component.__init_subclass__``.
+REGISTRY: dict[str, type["Component"]] = {}
+
+
+@dataclass(frozen=True)
+class Param:
+    """A component parameter.
+
+    ``unit`` is an SI unit string ("Pa", "K", "kg/s", "J/kg", "m3", "W/K", "1", "s").
+    ``kind`` is "number", "string", "bool" or "int". With ``time_function=True`` the
+    value may be a number or a ``dnasim.timefunctions`` function of time; the
+    component then reads it as ``self.param_at("name", t)``.
+    ``choices`` restricts a string parameter. ``default=REQUIRED`` means the user
+    must give it; ``default=None`` means "not given" (optional).
+    """
+
+    name: str
+    unit: str = "1"
+    default: object = REQUIRED
+    doc: str = ""
+    min: float | None = None
+    max: float | None = None
+    time_function: bool = False
+    kind: str = "number"
+    choices: tuple | None = None
+
+
+@dataclass(frozen=True)
+class FluidPort:
+    """A fluid port bound to a node carrying p [Pa] and h [J/kg].
+
+    role: "inlet", "outlet" (this component fixes the node enthalpy) or "probe"
+    (reads p and h, carries no flow).
+    flow: the local variable (or vector element, e.g. "m[0]") holding the mass flow
+    through the port, positive in the design direction [kg/s]; None for probes.
+    pressure: how the component ties the node pressure, used to explain
+    structural problems in plain words:
+      "storage"    the node pressure is the state of a storage volume of this component
+                   (no flow resistance between the volume and the node);
+      "fixed"      the node pressure is prescribed (pressure boundary);
+      "equal"      the node pressure equals the pressure at the component's other
+                   "equal" ports (junctions without resistance);
+      "resistance" a flow resistance sits between the node and the component's interior;
+      "none"       the component does not relate the node pressure to anything.
+    """
+
+    name: str
+    role: str
+    flow: str | None
+    pressure: str = "resistance"
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class SignalPort:
+    """A signal port carrying one scalar. For an output, ``variable`` is the
+    component variable exposed."""
+
+    name: str
+    unit: str = "1"
+    doc: str = ""
+    variable: str | None = None
+
+
+@dataclass(frozen=True)
+class Variable:
+    """An internal variable of a component.
+
+    nominal: a typical magnitude, in ``unit``; used for the absolute error
+    tolerance (atol_i = atol * max(nominal_i, |y0_i|)) and for scaling Newton steps.
+    size: None for a scalar, n for a vector with elements "name[0]".."name[n-1]".
+    accumulator: a running integral (e.g. mass that has passed a boundary) that
+    nothing else depends on; a steady-state start keeps it at its initial value
+    instead of forcing its derivative to zero.
+    Whether a variable is differential is not declared here: it is differential
+    when some equation declares its derivative.
+    """
+
+    name: str
+    unit: str
+    nominal: float = 1.0
+    size: int | None = None
+    doc: str = ""
+    accumulator: bool = False
+
+
+@dataclass(frozen=True)
+class Equation:
+    """One scalar residual equation.
+
+    y:  local names of the variables it touches;
+    yp: local names of the variables whose time derivative it touches.
+    """
+
+    name: str
+    y: tuple[str, ...] = ()
+    yp: tuple[str, ...] = ()
+    doc: str = ""
+
+
+@dataclass
+class Switch:
+    """A switch function g(t, x, xp) of the component's local variables.
+
+    The integrator locates the zero crossings of g in the given direction
+    (-1: from positive to negative, +1: the reverse, 0: both) and then calls
+    ``action(t, x, xp)``, which changes the component's discrete state (and so the
+    form of its residual). Convention used here: g is positive while the current
+    mode is valid and crosses to negative when the mode must change.
+    """
+
+    name: str
+    function: Callable
+    direction: int = -1
+    action: Callable | None = None
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Output:
+    """A derived output (not a variable), e.g. an outlet temperature [K]."""
+
+    name: str
+    unit: str
+    doc: str = ""
+
+
+class LocalVector:
+    """A component's view of the global vector: ``x["inlet.p"]``, ``x["M"]``.
+
+    Scalars come back as floats, vector variables as numpy arrays (views).
+    Assignment writes through (used for initial guesses).
+    """
+
+    __slots__ = ("data", "index")
+
+    def __init__(self, data: np.ndarray, index: dict):
+        self.data = data
+        self.index = index
+
+    def __getitem__(self, name):
+        k = self.index[name]
+        if isinstance(k, slice):
+            return self.data[k]
+        return float(self.data[k])
+
+    def __setitem__(self, name, value):
+        self.data[self.index[name]] = value
+
+    def __contains__(self, name):
+        return name in self.index
+
+
+def _check_number(comp, param, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise PlantError(
+            f"component '{comp}': parameter '{param.name}' must be a number [{param.unit}], got {value!r}"
+        )
+    value = float(value)
+    if not np.isfinite(value):
+        raise PlantError(f"component '{comp}': parameter '{param.name}' is not finite ({value!r})")
+    if param.min is not None and value < param.min:
+        raise PlantError(
+            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is below its minimum {param.min:g}"
+        )
+    if param.max is not None and value > param.max:
+        raise PlantError(
+            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is above its maximum {param.max:g}"
+        )
+    return value
+
+
+class Component:
+    """Base class of every component. See the module docstring for the contract.
+
+    Subclasses set ``PARAMS``, ``FLUID_PORTS``, ``SIGNAL_INPUTS``, ``SIGNAL_OUTPUTS``
+    (the full lists, used by ``describe()``), and implement ``variables()``,
+    ``equations()``, ``residual()``, and usually ``initial_guess()``. When the set
+    of ports depends on the parameters, override ``fluid_ports()`` /
+    ``signal_inputs()`` too.
+    """
+
+    PARAMS: tuple[Param, ...] = ()
+    FLUID_PORTS: tuple[FluidPort, ...] = ()
+    SIGNAL_INPUTS: tuple[SignalPort, ...] = ()
+    SIGNAL_OUTPUTS: tuple[SignalPort, ...] = ()
+    #: set to False in a subclass that must not appear in REGISTRY (tests, bases)
+    REGISTER = True
+    #: True when the component needs a fluid (a medium) at its ports
+    USES_MEDIUM = True
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("REGISTER", True):
+            REGISTRY[cls.__name__] = cls
+
+    # ------------------------------------------------------------------ set-up
+    def __init__(self, name: str, **params):
+        if not isinstance(name, str) or not name or "." in name or name != name.strip():
+            raise PlantError(
+                f"{type(self).__name__}: component name must be a non-empty string without '.' or spaces, got {name!r}"
+            )
+        self.name = name
+        known = {p.name: p for p in self.PARAMS}
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            raise PlantError(
+                f"component '{name}' ({type(self).__name__}): unknown parameter(s) {', '.join(unknown)}; "
+                f"known: {', '.join(known) or 'none'}"
+            )
+        self.params: dict[str, object] = {}
+        for p in self.PARAMS:
+            value = params.get(p.name, p.default)
+            if value is REQUIRED:
+                raise PlantError(
+                    f"component '{name}' ({type(self).__name__}): parameter '{p.name}' [{p.unit}] is required"
+                    + (f" ({p.doc})" if p.doc else "")
+                )
+            self.params[p.name] = self._validate(p, value)
+        self.medium = None  # set by the plant (dnasim.media medium object)
+        self.medium_name = self.params.get("medium")
+        self.setup()
+
+    def _validate(self, p: Param, value):
+        if value is None:
+            return None
+        if p.kind == "string":
+            if not isinstance(value, str):
+                raise PlantError(
+                    f"component '{self.name}': parameter '{p.name}' must be a string, got {value!r}"
+                )
+            if p.choices is not None and value not in p.choices:
+                raise PlantError(
+                    f"component '{self.name}': parameter '{p.name}' = {value!r} is not one of {', '.join(map(repr, p.choices))}"
+                )
+            return value
+        if p.kind == "bool":
+            if not isinstance(value, (bool, np.bool_)):
+                raise PlantError(
+                    f"component '{self.name}': parameter '{p.name}' must be true or false, got {value!r}"
+                )
+            return bool(value)
+        if p.kind == "int":
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise PlantError(
+                    f"component '{self.name}': parameter '{p.name}' must be an integer, got {value!r}"
+                )
+            _check_number(self.name, p, value)
+            return int(value)
+        if p.time_function and not isinstance(value, (int, float, np.integer, np.floating)):
+            try:
+                f = as_time_function(value)
+            except TypeError:
+                raise PlantError(
+                    f"component '{self.name}': parameter '{p.name}' must be a number [{p.unit}] or a time function, got {value!r}"
+                ) from None
+            for tt in (0.0, *f.breakpoints):
+                _check_number(self.name, p, f(tt))
+            return f
+        v = _check_number(self.name, p, value)
+        return as_time_function(v) if p.time_function else v
+
+    def setup(self):
+        """Hook: check parameter combinations, precompute derived constants."""
+
+    # ------------------------------------------------------------- parameters
+    def param_at(self, name: str, t: float) -> float:
+        """Value of parameter ``name`` at time t (time functions are evaluated)."""
+        v = self.params[name]
+        return v(t) if isinstance(v, TimeFunction) or callable(v) else v
+
+    def breakpoints(self) -> list[float]:
+        """Times at which a time-function parameter or its slope jumps."""
+        out = []
+        for v in self.params.values():
+            if isinstance(v, TimeFunction) or (callable(v) and hasattr(v, "breakpoints")):
+                out.extend(float(b) for b in v.breakpoints)
+        return out
+
+    # ----------------------------------------------------------- declarations
+    def fluid_ports(self) -> list[FluidPort]:
+        return list(self.FLUID_PORTS)
+
+    def signal_inputs(self) -> list[SignalPort]:
+        return list(self.SIGNAL_INPUTS)
+
+    def signal_outputs(self) -> list[SignalPort]:
+        return list(self.SIGNAL_OUTPUTS)
+
+    def variables(self) -> list[Variable]:
+        return []
+
+    def equations(self) -> list[Equation]:
+        return []
+
+    def residual(self, t: float, x: LocalVector, xp: LocalVector) -> np.ndarray:
+        raise NotImplementedError
+
+    def switches(self) -> list[Switch]:
+        return []
+
+    def outputs(self) -> list[Output]:
+        return []
+
+    def output_values(self, t: float, x: LocalVector, xp: LocalVector) -> list[float]:
+        return []
+
+    # ---------------------------------------------------------- initialisation
+    def guess_nodes(self, t0: float) -> dict[str, tuple[float | None, float | None]]:
+        """Guesses {port: (p, h)} for the nodes at the component's ports (None = no idea)."""
+        return {}
+
+    def initial_guess(self, t0: float, x: LocalVector) -> None:
+        """Fill guesses of the component's own variables; node values in x are set.
+
+        For a start from given states the differential variables filled here are
+        the initial state (the parameters that define it, e.g. a pipe's T0, are
+        documented per component)."""
+
+    def reset_discrete_state(self) -> None:
+        """Hook: put discrete state (modes) back to its default before a simulation."""
+
+    def init_discrete_state(self, t0: float, x: LocalVector, xp: LocalVector) -> bool:
+        """Hook: choose the discrete state that fits the initial values.
+
+        Return True when it changed (the plant then re-solves the initial state)."""
+        return False
+
+    # ---------------------------------------------------------------- helpers
+    def port(self, name: str) -> FluidPort:
+        for p in self.fluid_ports():
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    def h_from(self, prefix: str, t: float) -> float:
+        """Enthalpy [J/kg] from a parameter pair ``<prefix>h`` / ``<prefix>T`` at time t.
+
+        The pressure for T -> h is the parameter ``p`` if present, else 1 atm."""
+        h = self.params.get(prefix + "h")
+        if h is not None:
+            return self.param_at(prefix + "h", t)
+        p = self.param_at("p", t) if self.params.get("p") is not None else 101325.0
+        return self.medium.h_pT(p, self.param_at(prefix + "T", t))
+
+    @classmethod
+    def describe(cls) -> str:
+        """A text summary: ports, parameters (units, defaults), equations."""
+        lines = [f"{cls.__name__}"]
+        doc = textwrap.dedent(cls.__doc__ or "").strip()
+        if doc:
+            lines += ["", textwrap.indent(doc, "  ")]
+        if cls.FLUID_PORTS:
+            lines += ["", "  fluid ports:"]
+            for p in cls.FLUID_PORTS:
+                lines.append(f"    {p.name:<12} {p.role:<7} {p.doc}")
+        if cls.SIGNAL_INPUTS or cls.SIGNAL_OUTPUTS:
+            lines += ["", "  signal ports:"]
+            for p in cls.SIGNAL_INPUTS:
+                lines.append(f"    {p.name:<12} in      [{p.unit}] {p.doc}")
+            for p in cls.SIGNAL_OUTPUTS:
+                lines.append(f"    {p.name:<12} out     [{p.unit}] {p.doc}")
+        if cls.PARAMS:
+            lines += ["", "  parameters:"]
+            for p in cls.PARAMS:
+                if p.default is REQUIRED:
+                    d = "required"
+                elif p.default is None:
+                    d = "optional"
+                else:
+                    d = f"default {p.default!r}"
+                tf = ", may vary in time" if p.time_function else ""
+                lines.append(f"    {p.name:<12} [{p.unit}] {d}{tf}. {p.doc}")
+        return "\n".join(lines)
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.name!r})"
+
+
+@dataclass
+class _Layout:
+    """Local variable layout of one component (built by the assembly)."""
+
+    names: list = field(default_factory=list)
+    index: dict = field(default_factory=dict)

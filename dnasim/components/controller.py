@@ -1,0 +1,142 @@
+"""PIController: proportional-integral controller with output limits (seed eqs. 10.13a-e)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dnasim.components.base import Component, Equation, Param, SignalPort, Switch, Variable
+
+
+class PIController(Component):
+    """PI controller with an output limited to [z_min, z_max] by switch variables.
+
+    Symbols: e error, m_p proportional part, m_I integral part, v = m_p + m_I the
+    demanded output, z the output (signal ``z``).
+
+      error         e = s (measured - setpoint(t)),  s = +1 ("measured-setpoint") or -1   (10.13a)
+      proportional  m_p = Kp e                                                            (10.13c)
+      integral      dm_I/dt = KI e          (= 0 while saturated, if anti_windup)          (10.13d)
+      output        z = v                   mode "free"                                   (10.13b)
+                    z = z_max               mode "high" (saturated at the top)
+                    z = z_min               mode "low"
+
+    Switch functions (10.13e), positive while the mode holds, crossing zero from
+    above when it must change (direction -1):
+      upper: mode free: z_max - v  -> enter "high";  mode high: v - z_max -> leave to "free"
+      lower: mode free: v - z_min  -> enter "low";   mode low:  z_min - v -> leave to "free"
+    Given start: m_I starts at ``integral0``.
+    """
+
+    PARAMS = (
+        Param("Kp", "1", doc="proportional gain [output unit per measured unit]"),
+        Param("KI", "1/s", 0.0, "integral gain [output unit per measured unit and second]"),
+        Param(
+            "setpoint", "1", doc="set point, in the unit of the measured signal", time_function=True
+        ),
+        Param("z_min", "1", 0.0, "lower output limit"),
+        Param("z_max", "1", 1.0, "upper output limit"),
+        Param(
+            "error_sign",
+            "1",
+            "measured-setpoint",
+            "e = measured - setpoint, or the reverse",
+            kind="string",
+            choices=("measured-setpoint", "setpoint-measured"),
+        ),
+        Param("anti_windup", "1", False, "hold the integrator while saturated", kind="bool"),
+        Param("integral0", "1", 0.0, "initial integral part m_I (given start)"),
+        Param(
+            "measured_nominal",
+            "1",
+            100.0,
+            "typical magnitude of the measured signal (scales)",
+            min=0.0,
+        ),
+    )
+    SIGNAL_INPUTS = (SignalPort("measured", "1", "measured value"),)
+    SIGNAL_OUTPUTS = (SignalPort("z", "1", "limited output", variable="z"),)
+    USES_MEDIUM = False
+
+    def setup(self):
+        if not self.params["z_max"] > self.params["z_min"]:
+            from dnasim.errors import PlantError
+
+            raise PlantError(f"component '{self.name}': z_max must be greater than z_min")
+        self.sign = 1.0 if self.params["error_sign"] == "measured-setpoint" else -1.0
+        self.mode = "free"
+
+    def reset_discrete_state(self):
+        self.mode = "free"
+
+    def variables(self):
+        return [
+            Variable("e", "1", self.params["measured_nominal"] * 0.01, doc="error"),
+            Variable("m_p", "1", 1.0, doc="proportional part"),
+            Variable("m_I", "1", 1.0, doc="integral part"),
+            Variable("z", "1", 1.0, doc="output"),
+        ]
+
+    def equations(self):
+        return [
+            Equation("error", y=("e", "measured")),
+            Equation("proportional", y=("m_p", "e")),
+            Equation("integral", y=("e",), yp=("m_I",)),
+            Equation("output", y=("z", "m_p", "m_I")),
+        ]
+
+    def residual(self, t, x, xp):
+        e = x["e"]
+        P = self.params
+        hold = P["anti_windup"] and self.mode != "free"
+        if self.mode == "free":
+            out = x["z"] - (x["m_p"] + x["m_I"])
+        elif self.mode == "high":
+            out = x["z"] - P["z_max"]
+        else:
+            out = x["z"] - P["z_min"]
+        return np.array(
+            [
+                e - self.sign * (x["measured"] - self.param_at("setpoint", t)),
+                x["m_p"] - P["Kp"] * e,
+                xp["m_I"] - (0.0 if hold else P["KI"] * e),
+                out,
+            ]
+        )
+
+    # ----------------------------------------------------------------- switches
+    def _upper(self, t, x, xp):
+        v = x["m_p"] + x["m_I"]
+        return v - self.params["z_max"] if self.mode == "high" else self.params["z_max"] - v
+
+    def _lower(self, t, x, xp):
+        v = x["m_p"] + x["m_I"]
+        return self.params["z_min"] - v if self.mode == "low" else v - self.params["z_min"]
+
+    def _toggle_upper(self, t, x, xp):
+        self.mode = "free" if self.mode == "high" else "high"
+
+    def _toggle_lower(self, t, x, xp):
+        self.mode = "free" if self.mode == "low" else "low"
+
+    def switches(self):
+        return [
+            Switch("upper", self._upper, -1, self._toggle_upper, "enter/leave saturation at z_max"),
+            Switch("lower", self._lower, -1, self._toggle_lower, "enter/leave saturation at z_min"),
+        ]
+
+    def init_discrete_state(self, t0, x, xp):
+        v = x["m_p"] + x["m_I"]
+        old = self.mode
+        if v > self.params["z_max"]:
+            self.mode = "high"
+        elif v < self.params["z_min"]:
+            self.mode = "low"
+        else:
+            self.mode = "free"
+        return self.mode != old
+
+    def initial_guess(self, t0, x):
+        x["m_I"] = self.params["integral0"]
+        x["e"] = 0.0
+        x["m_p"] = 0.0
+        x["z"] = min(max(self.params["integral0"], self.params["z_min"]), self.params["z_max"])

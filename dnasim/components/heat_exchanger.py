@@ -1,0 +1,133 @@
+"""HeatExchanger: counter-flow, lumped in n_sections, with wall heat capacity."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
+from dnasim.components.channel import Channel
+from dnasim.errors import PlantError
+
+
+class HeatExchanger(Component):
+    """Counter-flow heat exchanger: a hot and a cold channel of n_sections volumes
+    each, sharing a wall. Hot section i faces cold section n-1-i (counter-flow).
+
+    Each channel is a series of volumes as in ``Pipe`` (prefix hot_ / cold_):
+    mass, energy, density, internal_energy, heat, momentum per volume, with
+      heat      Q_side[i] = kA_side/n LMTD(T_up - T_w, T_i - T_w)   (fluid -> wall)
+    and the wall, section i (C_i = C_wall/n):
+      wall[i]   C_i dT_w[i]/dt = hot_Q[i] + cold_Q[n-1-i]
+
+    Both fluids use the component's medium (one medium per component).
+    Outlets are storage volumes (lead them to a resistance).
+    Given start: fluid temperatures hot_T0, cold_T0; wall at their mean.
+    """
+
+    PARAMS = (
+        Param("hot_V", "m3", doc="hot side volume", min=0.0),
+        Param("cold_V", "m3", doc="cold side volume", min=0.0),
+        Param("hot_kA", "W/K", doc="hot side heat transfer coefficient times area", min=0.0),
+        Param("cold_kA", "W/K", doc="cold side heat transfer coefficient times area", min=0.0),
+        Param("hot_k", "1/m4", 0.0, "hot side friction coefficient", min=0.0),
+        Param("cold_k", "1/m4", 0.0, "cold side friction coefficient", min=0.0),
+        Param("C_wall", "J/K", doc="wall heat capacity", min=0.0),
+        Param("n_sections", "1", 1, "number of sections", min=1, kind="int"),
+        Param("m_nominal", "kg/s", 1.0, "typical mass flow", min=0.0),
+        Param("dT_reg", "K", 0.01, "LMTD regularisation temperature", min=0.0),
+        Param("hot_T0", "K", None, "initial hot fluid temperature (given start)", min=0.0),
+        Param("cold_T0", "K", None, "initial cold fluid temperature (given start)", min=0.0),
+        Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
+    )
+    FLUID_PORTS = (
+        FluidPort("hot_in", "inlet", "hot_m[0]", "resistance", "hot fluid in"),
+        FluidPort("hot_out", "outlet", "hot_m[n]", "storage", "hot fluid out"),
+        FluidPort("cold_in", "inlet", "cold_m[0]", "resistance", "cold fluid in"),
+        FluidPort("cold_out", "outlet", "cold_m[n]", "storage", "cold fluid out"),
+    )
+
+    def setup(self):
+        P = self.params
+        if P["C_wall"] <= 0 or P["hot_V"] <= 0 or P["cold_V"] <= 0:
+            raise PlantError(f"component '{self.name}': hot_V, cold_V and C_wall must be > 0")
+        n = self.n = P["n_sections"]
+        self.channels = {}
+        for side in ("hot", "cold"):
+            wall = [f"T_w[{i}]" if side == "hot" else f"T_w[{n - 1 - i}]" for i in range(n)]
+            self.channels[side] = Channel(
+                prefix=f"{side}_",
+                inlet=f"{side}_in",
+                outlet=f"{side}_out",
+                n=n,
+                V=P[f"{side}_V"],
+                k=P[f"{side}_k"],
+                dz=0.0,
+                kA=P[f"{side}_kA"],
+                m_nominal=P["m_nominal"],
+                m_reg=1e-4 * P["m_nominal"],
+                dT_reg=P["dT_reg"],
+                internal_energy="mean" if n == 1 else "outlet",
+                wall=wall,
+            )
+
+    def fluid_ports(self):
+        n = self.n
+        return [
+            FluidPort("hot_in", "inlet", "hot_m[0]", "resistance"),
+            FluidPort("hot_out", "outlet", f"hot_m[{n}]", "storage"),
+            FluidPort("cold_in", "inlet", "cold_m[0]", "resistance"),
+            FluidPort("cold_out", "outlet", f"cold_m[{n}]", "storage"),
+        ]
+
+    def variables(self):
+        out = []
+        for side, ch in self.channels.items():
+            M_nom = self.params[f"{side}_V"] / self.n * 1e-3
+            out += ch.variables(
+                M_nom, M_nom * 1e3, 1e5, 1e5, max(self.params[f"{side}_kA"] / self.n * 10, 1.0)
+            )
+        return out + [Variable("T_w", "K", 300.0, self.n, "wall temperature of section i")]
+
+    def equations(self):
+        n = self.n
+        eqs = self.channels["hot"].equations() + self.channels["cold"].equations()
+        for i in range(n):
+            eqs.append(
+                Equation(f"wall[{i}]", y=(f"hot_Q[{i}]", f"cold_Q[{n - 1 - i}]"), yp=(f"T_w[{i}]",))
+            )
+        return eqs
+
+    def residual(self, t, x, xp):
+        T_w = x["T_w"]
+        hot, cold = self.channels["hot"], self.channels["cold"]
+        blocks = hot.residual_blocks(x, xp, hot.evaluate(self.medium, x), T_w)
+        blocks += cold.residual_blocks(x, xp, cold.evaluate(self.medium, x), T_w[::-1])
+        wall = self.params["C_wall"] / self.n * xp["T_w"] - (x["hot_Q"] + x["cold_Q"][::-1])
+        return np.concatenate(blocks + [wall])
+
+    def outputs(self):
+        return [
+            Output("hot_T_out", "K", "hot outlet temperature"),
+            Output("cold_T_out", "K", "cold outlet temperature"),
+            Output("Q_total", "W", "heat from hot fluid to wall"),
+        ]
+
+    def output_values(self, t, x, xp):
+        _, _, Th, _, _ = self.channels["hot"].evaluate(self.medium, x)
+        _, _, Tc, _, _ = self.channels["cold"].evaluate(self.medium, x)
+        return [Th[-1], Tc[-1], float(np.sum(x["hot_Q"]))]
+
+    def initial_guess(self, t0, x):
+        n = self.n
+        frac = (np.arange(n) + 1.0) / n
+        T = {}
+        for side, ch in self.channels.items():
+            p_in, h_in = x[f"{side}_in.p"], x[f"{side}_in.h"]
+            p = p_in + (x[f"{side}_out.p"] - p_in) * frac
+            T0 = self.params[f"{side}_T0"]
+            if T0 is not None:
+                h = np.array([self.medium.h_pT(pi, T0) for pi in p])
+            else:
+                h = np.full(n, h_in)
+            T[side] = ch.guess(x, self.medium, p, h, self.params["m_nominal"])
+        x["T_w"] = 0.5 * (T["hot"][1:] + T["cold"][1:][::-1])

@@ -1,0 +1,100 @@
+"""Small physics helpers shared by components: property arrays, log-mean
+temperature difference, regularised friction and valve laws.
+
+All functions are vectorised over numpy arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+G = 9.80665  # standard gravity [m/s2]
+
+
+def properties(medium, p, h):
+    """T [K], rho [kg/m3], u [J/kg] at each (p [Pa], h [J/kg]) as arrays.
+
+    One ``medium.state(p, h)`` call per point. Raises the medium's
+    ``PropertyError`` (a ``ResidualDomainError``) when a state is out of range.
+    """
+    p = np.atleast_1d(np.asarray(p, dtype=float))
+    h = np.atleast_1d(np.asarray(h, dtype=float))
+    n = p.size
+    T = np.empty(n)
+    rho = np.empty(n)
+    u = np.empty(n)
+    state = medium.state
+    for i in range(n):
+        s = state(float(p[i]), float(h[i]))
+        T[i] = s.T
+        rho[i] = s.rho
+        u[i] = s.u
+    return T, rho, u
+
+
+def softplus(x, eps):
+    """eps * ln(1 + exp(x / eps)): a smooth, strictly positive version of max(x, 0)."""
+    return eps * np.logaddexp(0.0, np.asarray(x, dtype=float) / eps)
+
+
+def logarithmic_mean(x, y):
+    """(x - y) / ln(x / y) for x, y > 0, continued smoothly to (x + y)/2 at x = y.
+
+    With d = (x - y)/(x + y), ln(x/y) = 2 artanh(d), so the mean is
+    (x + y)/2 * d / artanh(d); for |d| < 1e-3 the series
+    d/artanh(d) = 1 - d^2/3 - 4 d^4/45 (error O(d^6) < 1e-18) is used. Where both
+    arguments are zero the mean is zero. No logarithm of a non-positive number is
+    ever taken.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    s = x + y
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        d = np.where(s > 0, (x - y) / np.where(s > 0, s, 1.0), 0.0)
+        small = np.abs(d) < 1e-3
+        d2 = d * d
+        series = 0.5 * s * (1.0 - d2 / 3.0 - 4.0 * d2 * d2 / 45.0)
+        safe_x = np.where(small | (x <= 0), 1.0, x)
+        safe_y = np.where(small | (y <= 0), 2.0, y)
+        exact = (safe_x - safe_y) / np.log(safe_x / safe_y)
+        out = np.where(small, series, exact)
+        # one argument underflowed to zero: the mean is zero in the limit
+        out = np.where((x <= 0) | (y <= 0), 0.0, out)
+    return out
+
+
+def lmtd(dT_a, dT_b, dT_reg):
+    """Regularised, signed log-mean temperature difference [K].
+
+    dT_a, dT_b: temperature differences fluid minus wall at the two ends.
+    For dT_a, dT_b >> dT_reg > 0 it equals (dT_a - dT_b)/ln(dT_a/dT_b); for both
+    << -dT_reg it equals minus the same for |dT|; at dT_a = dT_b it is the plain
+    difference dT_a. It is smooth everywhere (also when the two differences have
+    opposite signs, which happens during Newton iterations) because it is built
+    from the logarithmic mean of softplus(+dT) minus that of softplus(-dT).
+    """
+    a_pos = softplus(dT_a, dT_reg)
+    b_pos = softplus(dT_b, dT_reg)
+    a_neg = softplus(-np.asarray(dT_a, dtype=float), dT_reg)
+    b_neg = softplus(-np.asarray(dT_b, dtype=float), dT_reg)
+    return logarithmic_mean(a_pos, b_pos) - logarithmic_mean(a_neg, b_neg)
+
+
+def friction_dp(k, m, rho, m_reg):
+    """Friction pressure drop k m sqrt(m^2 + m_reg^2) / rho [Pa].
+
+    Equals k m|m|/rho for |m| >> m_reg, odd in m (reverse flow gives reverse
+    drop), and keeps d(dp)/dm > 0 at m = 0 so that a zero-flow state does not
+    make the Jacobian singular.
+    """
+    return k * m * np.sqrt(m * m + m_reg * m_reg) / rho
+
+
+def valve_flow(C, z, dp, dp_reg):
+    """Regularised valve law m = C z dp / (dp^2 + dp_reg^2)^(1/4) [kg/s].
+
+    For |dp| >> dp_reg this is C z sign(dp) sqrt(|dp|) (relative error
+    (dp_reg/dp)^2/4); near dp = 0 it is linear with finite slope
+    C z / sqrt(dp_reg), so the Jacobian stays finite. Reverse flow for dp < 0.
+    """
+    return C * z * dp / (dp * dp + dp_reg * dp_reg) ** 0.25

@@ -1,0 +1,225 @@
+"""Pipe: the seed's lumped pipe model (eqs. 10.12), optionally split into
+``n_volumes`` control volumes in series."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
+from dnasim.components.channel import Channel
+from dnasim.errors import PlantError
+
+
+class Pipe(Component):
+    """Lumped pipe with wall heat capacity (seed eqs. 10.12), n_volumes in series.
+
+    Each volume i (i = 0..n-1; V_i = V/n, kA_i = kA/n, k_i = k/n, C_i = C_wall/n):
+
+      mass[i]             dM[i]/dt = m[i] - m[i+1]                       (10.12a)
+      energy[i]           dU[i]/dt = m[i] h_up - m[i+1] h_i - Q[i]
+      wall[i]             C_i dT_w[i]/dt = Q[i]                         (with energy: 10.12b,
+                                                                         U_s = C_wall T_w)
+                          or T_w[i] = T_wall(t) when T_wall is given (fixed wall)
+                          or T_w[i] = T_i when C_wall = kA = 0 (adiabatic, no wall)
+      density[i]          M[i] = V_i rho(p_i, h_i)                       (10.12d)
+      internal_energy[i]  U[i] = M[i] (u_up + u_i)/2   (10.12c, "mean": default for n_volumes = 1)
+                          U[i] = M[i] u_i              ("outlet": default for n_volumes > 1,
+                                                        since chained "mean" volumes zig-zag)
+      heat[i]             Q[i] = kA_i LMTD(T_up - T_w[i], T_i - T_w[i])  (10.12e, heat_transfer="lmtd")
+                          (or kA_i (T_i - T_w[i]) "outlet", kA_i ((T_up + T_i)/2 - T_w[i]) "mean")
+      momentum[i]         p_up - p_i = k_i m[i] sqrt(m[i]^2 + m_reg^2)/rho_up + rho_up g dz/n
+
+    "up" is the inlet node for volume 0, else volume i-1; the last volume's state is
+    the outlet node. m[0] is the inlet flow, m[n] the outlet flow. The LMTD is the
+    regularised form of ``dnasim.components.physics.lmtd`` (no log of a
+    non-positive number, equal to the plain difference when both ends agree).
+    Friction sits at the inlet face of each volume, so a pipe's outlet is a storage
+    volume: connect it to a pressure boundary or another storage volume only
+    through a flow resistance (e.g. a Valve), otherwise the DAE has index 2.
+
+    Given start (start="given"): the fluid starts at pressure p0 (default: the
+    node guesses) and temperature T0, the wall at T_wall0 (default T0).
+    """
+
+    PARAMS = (
+        Param("V", "m3", doc="fluid volume", min=0.0),
+        Param("kA", "W/K", 0.0, "heat transfer coefficient times area, fluid to wall", min=0.0),
+        Param("k", "1/m4", 0.0, "friction coefficient: dp = k m|m|/rho", min=0.0),
+        Param("dz", "m", 0.0, "height of outlet above inlet"),
+        Param(
+            "C_wall", "J/K", 0.0, "heat capacity of the wall (mass times specific heat)", min=0.0
+        ),
+        Param(
+            "T_wall",
+            "K",
+            None,
+            "prescribed wall temperature (no wall storage)",
+            min=0.0,
+            time_function=True,
+        ),
+        Param("n_volumes", "1", 1, "number of control volumes in series", min=1, kind="int"),
+        Param(
+            "internal_energy",
+            "1",
+            "mean",
+            "U = M (u_in+u_out)/2 (seed) or U = M u_out",
+            kind="string",
+            choices=("mean", "outlet"),
+        ),
+        Param("heat_transfer", "1", "lmtd", "temperature difference: log-mean (seed), outlet (upwind) or mean",
+              kind="string", choices=("lmtd", "outlet", "mean")),
+        Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
+        Param(
+            "m_reg", "kg/s", None, "friction regularisation flow (default 1e-4 m_nominal)", min=0.0
+        ),
+        Param("dT_reg", "K", 0.01, "LMTD regularisation temperature", min=0.0),
+        Param("p0", "Pa", None, "initial fluid pressure (given start)", min=0.0),
+        Param("T0", "K", None, "initial fluid temperature (given start)", min=0.0),
+        Param("T_wall0", "K", None, "initial wall temperature (given start), default T0", min=0.0),
+        Param(
+            "medium",
+            "1",
+            None,
+            "fluid name, e.g. 'Air', 'Water' (default: from the network)",
+            kind="string",
+        ),
+    )
+    FLUID_PORTS = (
+        FluidPort("inlet", "inlet", "m[0]", "resistance", "fluid in (friction at this face)"),
+        FluidPort(
+            "outlet", "outlet", None, "storage", "fluid out; its node is the last volume's state"
+        ),
+    )
+
+    def setup(self):
+        P = self.params
+        n = P["n_volumes"]
+        if P["V"] <= 0:
+            raise PlantError(f"component '{self.name}': parameter 'V' must be > 0 m3")
+        if P["C_wall"] == 0 and P["T_wall"] is None and P["kA"] > 0:
+            raise PlantError(
+                f"component '{self.name}': with kA > 0 give either C_wall > 0 (wall storage) or T_wall (fixed wall)"
+            )
+        self.n = n
+        # "mean" chained over several volumes extrapolates each outlet state from its
+        # inlet (u_i = 2U/M - u_up): a step upstream makes the volumes zig-zag and
+        # the transient blows up; several volumes therefore default to "outlet".
+        self.internal_energy = P["internal_energy"] or ("mean" if n == 1 else "outlet")
+        self.fixed_wall = P["T_wall"] is not None
+        # kA = 0 and no wall capacity: adiabatic pipe, the wall variable just follows the fluid
+        self.no_wall = not self.fixed_wall and P["C_wall"] == 0
+        m_reg = P["m_reg"] if P["m_reg"] is not None else 1e-4 * max(P["m_nominal"], 1e-12)
+        self.channel = Channel(
+            prefix="",
+            inlet="inlet",
+            outlet="outlet",
+            n=n,
+            V=P["V"],
+            k=P["k"],
+            dz=P["dz"],
+            kA=P["kA"],
+            m_nominal=P["m_nominal"],
+            m_reg=m_reg,
+            dT_reg=P["dT_reg"],
+            internal_energy=self.internal_energy,
+            wall=[f"T_w[{i}]" for i in range(n)],
+            heat_transfer=P["heat_transfer"],
+        )
+
+    def fluid_ports(self):
+        return [
+            FluidPort("inlet", "inlet", "m[0]", "resistance", "fluid in"),
+            FluidPort("outlet", "outlet", f"m[{self.n}]", "storage", "fluid out"),
+        ]
+
+    def variables(self):
+        P = self.params
+        # M and U scales are raised to |initial value| by the assembly
+        M_nom = P["V"] / self.n * 1e-3
+        U_nom = M_nom * 1e3
+        Q_nom = max(P["kA"] / self.n * 10.0, 1.0)
+        return self.channel.variables(M_nom, U_nom, 1e5, 1e5, Q_nom) + [
+            Variable("T_w", "K", 300.0, self.n, "wall temperature of volume i"),
+        ]
+
+    def equations(self):
+        eqs = self.channel.equations()
+        C_i = self.params["C_wall"] / self.n
+        for i in range(self.n):
+            if self.fixed_wall:
+                eqs.append(Equation(f"wall[{i}]", y=(f"T_w[{i}]",), doc="T_w = T_wall(t)"))
+            elif self.no_wall:
+                pi, hi = self.channel.p_name(i), self.channel.h_name(i)
+                eqs.append(
+                    Equation(f"wall[{i}]", y=(f"T_w[{i}]", pi, hi), doc="T_w = T (adiabatic)")
+                )
+            else:
+                eqs.append(
+                    Equation(
+                        f"wall[{i}]", y=(f"Q[{i}]",), yp=(f"T_w[{i}]",), doc=f"{C_i:g} dT_w/dt = Q"
+                    )
+                )
+        return eqs
+
+    def residual(self, t, x, xp):
+        props = self.channel.evaluate(self.medium, x)
+        T_w = x["T_w"]
+        blocks = self.channel.residual_blocks(x, xp, props, T_w)
+        if self.fixed_wall:
+            blocks.append(T_w - self.param_at("T_wall", t))
+        elif self.no_wall:
+            blocks.append(T_w - props[2][1:])
+        else:
+            blocks.append(self.params["C_wall"] / self.n * xp["T_w"] - x["Q"])
+        return np.concatenate(blocks)
+
+    def outputs(self):
+        return [
+            Output("T_in", "K", "inlet temperature"),
+            Output("T_out", "K", "outlet temperature"),
+            Output("M_total", "kg", "fluid mass in the pipe"),
+            Output("U_total", "J", "fluid internal energy in the pipe"),
+            Output("E_wall", "J", "wall energy C_wall T_w (reference 0 K)"),
+            Output("Q_total", "W", "heat flow from fluid to wall"),
+        ] + [Output(f"T[{i}]", "K", f"fluid temperature of volume {i}") for i in range(self.n)]
+
+    def output_values(self, t, x, xp):
+        _, _, T, _, _ = self.channel.evaluate(self.medium, x)
+        C_i = self.params["C_wall"] / self.n
+        return [
+            T[0],
+            T[-1],
+            float(np.sum(x["M"])),
+            float(np.sum(x["U"])),
+            float(C_i * np.sum(x["T_w"])),
+            float(np.sum(x["Q"])),
+            *T[1:],
+        ]
+
+    def guess_nodes(self, t0):
+        P = self.params
+        if P["T0"] is None:
+            return {}
+        p = P["p0"]
+        if p is None:
+            return {"outlet": (None, None)}
+        return {"outlet": (p, self.medium.h_pT(p, P["T0"]))}
+
+    def initial_guess(self, t0, x):
+        P = self.params
+        n = self.n
+        p_in, h_in = x["inlet.p"], x["inlet.h"]
+        p_out = P["p0"] if P["p0"] is not None else x["outlet.p"]
+        frac = (np.arange(n) + 1.0) / n
+        p = p_in + (p_out - p_in) * frac
+        if P["T0"] is not None:
+            h = np.array([self.medium.h_pT(pi, P["T0"]) for pi in p])
+        else:
+            h = h_in + (x["outlet.h"] - h_in) * frac
+        T = self.channel.guess(x, self.medium, p, h, P["m_nominal"])
+        if self.fixed_wall:
+            x["T_w"] = self.param_at("T_wall", t0)
+        elif P["T_wall0"] is not None:
+            x["T_w"] = P["T_wall0"]
+        else:
+            x["T_w"] = T[1:]

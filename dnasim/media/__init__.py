@@ -1,0 +1,40 @@
+"""Fluid media: properties from pressure p [Pa] and specific enthalpy h [J/kg].
+
+::
+
+    from dnasim.media import get_medium, PropertyError
+    water = get_medium("Water")                   # IAPWS-IF97 (default for water)
+    air = get_medium("Air")                       # constant-cp ideal gas
+    air_real = get_medium("Air", backend="HEOS")  # CoolProp's real-gas air
+    r134a = get_medium("R134a", backend="HEOS")   # any CoolProp fluid
+    st = water.state(1e5, 4.2e5)                  # -> FluidState (cached)
+    st.T, st.rho, st.u, st.s, st.cp, st.quality, st.drho_dp_h, st.drho_dh_p
+    water.h_pT(1e5, 350.0)                        # -> h [J/kg]
+
+Every failure to evaluate a state is a :class:`PropertyError` (a
+:class:`dnasim.errors.ResidualDomainError`) that names the fluid, p, h and the
+property. Modules: ``state`` (FluidState), ``errors`` (PropertyError),
+``base`` (Medium and its cache), ``if97`` (water by IF97), ``coolprop_medium``
+(HEOS and tabular CoolProp backends), ``ideal_gas`` (IdealGas), ``registry``
+(get_medium and fluid names).
+"""
+
+from dnasim.media.base import Medium
+from dnasim.media.coolprop_medium import CoolPropMedium
+from dnasim.media.errors import PropertyError
+from dnasim.media.ideal_gas import IdealGas
+from dnasim.media.if97 import IF97Water
+from dnasim.media.registry import BACKENDS, canonical_fluid_name, get_medium
+from dnasim.media.state import FluidState
+
+__all__ = [
+    "BACKENDS",
+    "CoolPropMedium",
+    "FluidState",
+    "IF97Water",
+    "IdealGas",
+    "Medium",
+    "PropertyError",
+    "canonical_fluid_name",
+    "get_medium",
+]

@@ -1,0 +1,218 @@
+"""`Medium`: the common interface of every fluid, with the (p, h) state cache.
+
+A subclass implements two methods, :meth:`Medium._compute_state` and
+:meth:`Medium._compute_h_pT`, on already checked float inputs. Everything a
+caller relies on lives here: input checks (NaN, inf, p <= 0), the
+bounded cache, the translation of any backend exception into
+:class:`~dnasim.media.errors.PropertyError`, and the check of the outputs for
+NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+
+from dnasim.media.errors import PropertyError
+from dnasim.media.state import FluidState
+
+_INF = math.inf
+
+#: Exception types a CoolProp call may raise for a state it cannot evaluate
+#: (C++ exceptions arrive as ValueError, IndexError or RuntimeError depending
+#: on their type; the IF97 backend raises IndexError for "out of range").
+BACKEND_ERRORS = (ValueError, IndexError, RuntimeError, ArithmeticError)
+
+
+class Medium(ABC):
+    """A fluid whose state is given by pressure p [Pa] and specific enthalpy h [J/kg].
+
+    Obtain instances through :func:`dnasim.media.get_medium`, which shares one
+    instance per (fluid, backend) so that all components share its cache.
+
+    Attributes
+    ----------
+    name : str
+        Canonical fluid name, e.g. ``"Water"``, ``"Air"``, ``"R134a"``.
+    backend : str
+        ``"IF97"``, ``"HEOS"``, ``"BICUBIC&HEOS"``, ``"TTSE&HEOS"`` or ``"IdealGas"``.
+    n_evaluations : int
+        Number of states actually computed (cache misses that reached the
+        backend). Tests and benchmarks read it; nothing else depends on it.
+    cache_size : int
+        The cache is emptied when it reaches this many entries.
+
+    Notes
+    -----
+    **Cache.** ``state(p, h)`` is memoised on the exact pair of floats
+    ``(p, h)``: the second call with the same numbers returns the same
+    :class:`FluidState` object without calling the backend. A plant node shared
+    by several components therefore costs one flash per residual evaluation.
+    The cache is a plain dict cleared when it reaches ``cache_size`` entries
+    (default 4096), so memory is bounded and a cache hit costs a dict lookup.
+    ``h_pT`` has its own cache of the same kind. A medium instance, like the
+    CoolProp ``AbstractState`` inside it, is not thread-safe.
+    """
+
+    name: str
+    backend: str
+
+    def __init__(self, name: str, backend: str, *, cache_size: int = 4096) -> None:
+        self.name = name
+        self.backend = backend
+        self.cache_size = int(cache_size)
+        self.n_evaluations = 0
+        self._cache: dict[tuple[float, float], FluidState] = {}
+        self._cache_hpT: dict[tuple[float, float], float] = {}
+
+    # ------------------------------------------------------------------ API
+    @property
+    def label(self) -> str:
+        """``"Water (IF97)"``: how error messages name this medium."""
+        return f"{self.name} ({self.backend})"
+
+    def state(self, p: float, h: float) -> FluidState:
+        """Return the state at pressure ``p`` [Pa] and specific enthalpy ``h`` [J/kg].
+
+        Cached on the exact ``(p, h)`` floats (see the class notes).
+
+        Raises
+        ------
+        PropertyError
+            If ``p`` is not finite and positive, ``h`` is not finite, the
+            backend cannot evaluate the state, or an output is NaN.
+        """
+        st = self._cache.get((p, h))
+        if st is not None:
+            return st
+        return self._state_miss(p, h)
+
+    def h_pT(self, p: float, T: float) -> float:
+        """Return the specific enthalpy h [J/kg] at pressure ``p`` [Pa] and temperature ``T`` [K].
+
+        Single-phase states only: (p, T) does not fix a state inside the
+        two-phase dome, so a ``T`` at the saturation temperature of ``p``
+        raises :class:`PropertyError` (see the backend's docstring for the
+        exact band); use :meth:`h_pQ` for saturated states. Cached like
+        :meth:`state`.
+        """
+        hv = self._cache_hpT.get((p, T))
+        if hv is not None:
+            return hv
+        pf = float(p)
+        Tf = float(T)
+        if not (0.0 < pf < _INF):
+            raise PropertyError(
+                self.label, pf, math.nan, "h_pT", "pressure must be finite and > 0", T=Tf
+            )
+        if not (0.0 < Tf < _INF):
+            raise PropertyError(
+                self.label, pf, math.nan, "h_pT", "temperature must be finite and > 0", T=Tf
+            )
+        try:
+            hv = float(self._compute_h_pT(pf, Tf))
+        except PropertyError:
+            raise
+        except BACKEND_ERRORS as exc:
+            raise PropertyError(self.label, pf, math.nan, "h_pT", str(exc), T=Tf) from exc
+        if not (-_INF < hv < _INF):
+            raise PropertyError(
+                self.label, pf, math.nan, "h_pT", f"backend returned h = {hv}", T=Tf
+            )
+        cache = self._cache_hpT
+        if len(cache) >= self.cache_size:
+            cache.clear()
+        cache[(p, T)] = hv
+        return hv
+
+    def h_pQ(self, p: float, quality: float) -> float:
+        """Return h [J/kg] of the saturated mixture at ``p`` [Pa] and vapour quality [-] in [0, 1].
+
+        Raises :class:`PropertyError` for media without a two-phase region
+        (the ideal gas) and for ``p`` at or above the critical pressure.
+        """
+        pf = float(p)
+        x = float(quality)
+        if not (0.0 < pf < _INF):
+            raise PropertyError(self.label, pf, math.nan, "h_pQ", "pressure must be finite and > 0")
+        if not (0.0 <= x <= 1.0):
+            raise PropertyError(self.label, pf, math.nan, "h_pQ", f"quality {x!r} not in [0, 1]")
+        try:
+            hv = float(self._compute_h_pQ(pf, x))
+        except PropertyError:
+            raise
+        except BACKEND_ERRORS as exc:
+            raise PropertyError(self.label, pf, math.nan, "h_pQ", str(exc)) from exc
+        if not (-_INF < hv < _INF):
+            raise PropertyError(self.label, pf, math.nan, "h_pQ", f"backend returned h = {hv}")
+        return hv
+
+    def cache_clear(self) -> None:
+        """Empty the ``state`` and ``h_pT`` caches."""
+        self._cache.clear()
+        self._cache_hpT.clear()
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.label}>"
+
+    # ------------------------------------------------------- implementation
+    def _state_miss(self, p: float, h: float) -> FluidState:
+        key = (p, h)
+        pf = float(p)
+        hf = float(h)
+        if not (0.0 < pf < _INF):
+            raise PropertyError(self.label, pf, hf, "state", "pressure must be finite and > 0")
+        if not (-_INF < hf < _INF):
+            raise PropertyError(self.label, pf, hf, "state", "enthalpy must be finite")
+        try:
+            st = self._compute_state(pf, hf)
+        except PropertyError:
+            raise
+        except BACKEND_ERRORS as exc:
+            raise PropertyError(self.label, pf, hf, "state", str(exc)) from exc
+        self.n_evaluations += 1
+        _check_outputs(self.label, st)
+        cache = self._cache
+        if len(cache) >= self.cache_size:
+            cache.clear()
+        cache[key] = st
+        return st
+
+    @abstractmethod
+    def _compute_state(self, p: float, h: float) -> FluidState:
+        """Compute the state at checked ``p`` > 0 [Pa] and finite ``h`` [J/kg].
+
+        May raise :class:`PropertyError` or any of ``BACKEND_ERRORS``.
+        """
+
+    @abstractmethod
+    def _compute_h_pT(self, p: float, T: float) -> float:
+        """h [J/kg] at checked ``p`` > 0 [Pa] and ``T`` > 0 [K]."""
+
+    def _compute_h_pQ(self, p: float, x: float) -> float:
+        raise PropertyError(self.label, p, math.nan, "h_pQ", "this medium has no two-phase region")
+
+
+def _check_outputs(label: str, st: FluidState) -> None:
+    """Raise PropertyError if an output of ``st`` is NaN or unphysical."""
+    T, rho = st.T, st.rho
+    if not (0.0 < T < _INF):
+        raise PropertyError(label, st.p, st.h, "T", f"backend returned T = {T} K")
+    if not (0.0 < rho < _INF):
+        raise PropertyError(label, st.p, st.h, "rho", f"backend returned rho = {rho} kg/m3")
+    if not (
+        -_INF < st.u < _INF
+        and -_INF < st.s < _INF
+        and -_INF < st.drho_dp_h < _INF
+        and -_INF < st.drho_dh_p < _INF
+    ):
+        for prop in ("u", "s", "drho_dp_h", "drho_dh_p"):
+            val = getattr(st, prop)
+            if not (-_INF < val < _INF):
+                raise PropertyError(label, st.p, st.h, prop, f"backend returned {prop} = {val}")
+    cp = st.cp
+    if not (0.0 < cp <= _INF):  # inf is the documented two-phase value; NaN fails
+        raise PropertyError(label, st.p, st.h, "cp", f"backend returned cp = {cp} J/(kg K)")
+    q = st.quality
+    if not (q == -1.0 or 0.0 <= q <= 1.0):
+        raise PropertyError(label, st.p, st.h, "quality", f"backend returned quality = {q}")

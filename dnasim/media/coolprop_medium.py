@@ -1,0 +1,122 @@
+"""`CoolPropMedium`: any CoolProp fluid through the low-level ``AbstractState``.
+
+Used for the Helmholtz-energy backend (``"HEOS"``) and the tabular backends
+built on it (``"BICUBIC&HEOS"``, ``"TTSE&HEOS"``). Water by IAPWS-IF97 has its
+own class, :class:`dnasim.media.if97.IF97Water`, because CoolProp's IF97
+backend lacks the derivatives and its (p, h) flash is only as accurate as the
+IF97 backward equations.
+
+The low-level interface (``AbstractState.update(HmassP_INPUTS, h, p)`` and
+then one call per output) is used instead of ``PropsSI``, which parses strings
+and re-creates the state on every call and is 10 to 40 times slower.
+"""
+
+from __future__ import annotations
+
+import math
+
+import CoolProp.CoolProp as CP
+
+from dnasim.media.base import BACKEND_ERRORS, Medium
+from dnasim.media.errors import PropertyError
+from dnasim.media.state import FluidState
+
+_HP = CP.HmassP_INPUTS
+_PT = CP.PT_INPUTS
+_PQ = CP.PQ_INPUTS
+_iDmass = CP.iDmass
+_iP = CP.iP
+_iHmass = CP.iHmass
+_TWOPHASE = CP.iphase_twophase
+_INF = math.inf
+
+
+class CoolPropMedium(Medium):
+    """A CoolProp fluid evaluated with ``AbstractState(backend, fluid)``.
+
+    Parameters
+    ----------
+    fluid : str
+        Canonical CoolProp fluid name (``"Water"``, ``"R134a"``, ``"Air"``, ...).
+    backend : str
+        ``"HEOS"`` (multiparameter Helmholtz equation of state, the reference
+        accuracy, about 100 to 200 us per (p, h) flash), or ``"BICUBIC&HEOS"`` /
+        ``"TTSE&HEOS"`` (interpolation in tables generated from HEOS; a few us
+        per call, but the first use of a fluid builds the tables, which takes
+        some seconds, and CoolProp caches them under ``~/.CoolProp/Tables``).
+
+    Notes
+    -----
+    Outputs of :meth:`state`:
+
+    - ``T``, ``rho``, ``s`` from the backend; ``u = h - p / rho``.
+    - Single phase: ``cp`` from the backend, ``quality = -1``,
+      ``drho_dp_h = first_partial_deriv(iDmass, iP, iHmass)``,
+      ``drho_dh_p = first_partial_deriv(iDmass, iHmass, iP)`` (analytic in
+      HEOS; from the table's interpolant in the tabular backends).
+    - Inside the two-phase dome (the backend reports ``iphase_twophase``):
+      ``quality`` = the backend's Q in [0, 1], ``cp = inf``, and the
+      derivatives from ``first_two_phase_deriv`` (the homogeneous-mixture
+      derivatives; the plain partial derivative is not defined there).
+
+    ``h_pT`` at (or within the backend's band of about 1e-4 % in saturation
+    pressure of) the saturation temperature raises :class:`PropertyError`,
+    as does ``T`` within 1e-6 K of ``Tsat(p)``: (p, T) does not fix h in the
+    dome. Use :meth:`h_pQ` for saturated states.
+    """
+
+    def __init__(self, fluid: str, backend: str = "HEOS", *, cache_size: int = 4096) -> None:
+        super().__init__(fluid, backend, cache_size=cache_size)
+        self._AS = CP.AbstractState(backend, fluid)
+        try:
+            self.p_critical = float(self._AS.p_critical())
+            self.T_critical = float(self._AS.T_critical())
+        except BACKEND_ERRORS:  # pseudo-pure fluids without a true critical point
+            self.p_critical = math.nan
+            self.T_critical = math.nan
+
+    def _compute_state(self, p: float, h: float) -> FluidState:
+        AS = self._AS
+        AS.update(_HP, h, p)
+        T = AS.T()
+        rho = AS.rhomass()
+        s = AS.smass()
+        if AS.phase() == _TWOPHASE:
+            q = AS.Q()
+            cp = _INF
+            d_p = AS.first_two_phase_deriv(_iDmass, _iP, _iHmass)
+            d_h = AS.first_two_phase_deriv(_iDmass, _iHmass, _iP)
+            if not (0.0 <= q <= 1.0):
+                raise PropertyError(self.label, p, h, "quality", f"two-phase state with Q = {q}")
+        else:
+            q = -1.0
+            cp = AS.cpmass()
+            d_p = AS.first_partial_deriv(_iDmass, _iP, _iHmass)
+            d_h = AS.first_partial_deriv(_iDmass, _iHmass, _iP)
+        return FluidState(p, h, T, rho, h - p / rho, s, cp, q, d_p, d_h)
+
+    def _compute_h_pT(self, p: float, T: float) -> float:
+        AS = self._AS
+        if p < self.p_critical:
+            try:
+                AS.update(_PQ, p, 0.0)
+                Tsat = AS.T()
+            except BACKEND_ERRORS:
+                Tsat = math.nan
+            if abs(T - Tsat) <= 1e-6:
+                raise PropertyError(
+                    self.label,
+                    p,
+                    math.nan,
+                    "h_pT",
+                    f"T is the saturation temperature {Tsat:.9g} K of p: h is not fixed "
+                    "by (p, T) inside the two-phase dome; use h_pQ",
+                    T=T,
+                )
+        AS.update(_PT, p, T)
+        return AS.hmass()
+
+    def _compute_h_pQ(self, p: float, x: float) -> float:
+        AS = self._AS
+        AS.update(_PQ, p, x)
+        return AS.hmass()

@@ -1,0 +1,118 @@
+"""`IdealGas`: a perfect gas with constant specific heat (air by default)."""
+
+from __future__ import annotations
+
+import math
+
+from dnasim.errors import PlantError
+from dnasim.media.base import Medium
+from dnasim.media.errors import PropertyError
+from dnasim.media.state import FluidState
+
+_log = math.log
+
+
+class IdealGas(Medium):
+    """Ideal gas with constant isobaric specific heat.
+
+    Closed forms, with R [J/(kg K)], cp [J/(kg K)] constant, T_ref [K], p_ref [Pa]::
+
+        T   = T_ref + h / cp                 [K]       (so h = cp (T - T_ref), h(T_ref) = 0)
+        rho = p / (R T)                      [kg/m3]
+        u   = h - p / rho = h - R T          [J/kg]    (h = u + p v exactly, no extra constant)
+        s   = cp ln(T / T_ref) - R ln(p / p_ref)   [J/(kg K)]   (s = 0 at T_ref, p_ref)
+        cp  = cp,  cv = cp - R
+        drho/dp|h = 1 / (R T)                [kg/(m3 Pa)]
+        drho/dh|p = -rho / (cp T)            [kg2/(m3 J)]
+        quality = -1 (no two-phase region)
+
+    ``u`` carries no arbitrary constant on purpose: storage terms use ``u``
+    while flows carry ``h``, and they must satisfy ``h = u + p/rho``. A state
+    with T <= 0 K (``h <= -cp T_ref``) raises :class:`PropertyError`.
+
+    ``get_medium("Air")`` returns the shared instance with the default
+    parameters (dry air, R = 287.05 J/(kg K), cp = 1006 J/(kg K),
+    T_ref = 273.15 K, p_ref = 101325 Pa), as in the DNA lecture notes' pipe
+    example; ``get_medium("Air", backend="HEOS")`` gives CoolProp's real-gas
+    air instead. For another gas construct ``IdealGas(name, R=..., cp=...)``
+    directly (it is then not shared through ``get_medium``).
+
+    Parameters
+    ----------
+    name : str
+        Name used in messages.
+    R : float
+        Specific gas constant [J/(kg K)], > 0.
+    cp : float
+        Isobaric specific heat [J/(kg K)], > R.
+    T_ref : float
+        Temperature [K] at which h = 0 and s = 0 (with ``p_ref``).
+    p_ref : float
+        Pressure [Pa] at which s = 0 (with ``T_ref``).
+
+    Raises
+    ------
+    dnasim.errors.PlantError
+        For a non-positive or non-finite parameter, or cp <= R.
+    """
+
+    def __init__(
+        self,
+        name: str = "Air",
+        R: float = 287.05,
+        cp: float = 1006.0,
+        T_ref: float = 273.15,
+        p_ref: float = 101325.0,
+        *,
+        cache_size: int = 4096,
+    ) -> None:
+        super().__init__(name, "IdealGas", cache_size=cache_size)
+        R = float(R)
+        cp = float(cp)
+        if not (0.0 < R < math.inf):
+            raise PlantError(f"IdealGas {name}: R must be finite and > 0, got {R}")
+        if not (R < cp < math.inf):
+            raise PlantError(f"IdealGas {name}: cp must be finite and > R = {R}, got {cp}")
+        if not (0.0 < T_ref < math.inf and 0.0 < p_ref < math.inf):
+            raise PlantError(f"IdealGas {name}: T_ref and p_ref must be finite and > 0")
+        self.R = R
+        self.cp = cp
+        self.T_ref = float(T_ref)
+        self.p_ref = float(p_ref)
+
+    @property
+    def cv(self) -> float:
+        """Isochoric specific heat cv = cp - R [J/(kg K)]."""
+        return self.cp - self.R
+
+    @property
+    def gamma(self) -> float:
+        """Heat capacity ratio cp / cv [-]."""
+        return self.cp / (self.cp - self.R)
+
+    def T_h(self, h: float) -> float:
+        """Temperature [K] from specific enthalpy h [J/kg] (independent of p)."""
+        return self.T_ref + h / self.cp
+
+    def _compute_state(self, p: float, h: float) -> FluidState:
+        cp = self.cp
+        R = self.R
+        T = self.T_ref + h / cp
+        if not T > 0.0:
+            raise PropertyError(self.label, p, h, "T", f"temperature T = {T} K is not positive")
+        rho = p / (R * T)
+        return FluidState(
+            p,
+            h,
+            T,
+            rho,
+            h - p / rho,
+            cp * _log(T / self.T_ref) - R * _log(p / self.p_ref),
+            cp,
+            -1.0,
+            1.0 / (R * T),
+            -rho / (cp * T),
+        )
+
+    def _compute_h_pT(self, p: float, T: float) -> float:
+        return self.cp * (T - self.T_ref)

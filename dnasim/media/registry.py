@@ -1,0 +1,171 @@
+"""`get_medium`: fluid names and backends to shared :class:`Medium` instances."""
+
+from __future__ import annotations
+
+import difflib
+import re
+
+import CoolProp.CoolProp as CP
+
+from dnasim.errors import PlantError
+from dnasim.media.base import BACKEND_ERRORS, Medium
+
+#: Backends accepted by :func:`get_medium` (case-insensitive).
+BACKENDS = ("IF97", "HEOS", "BICUBIC&HEOS", "TTSE&HEOS", "IdealGas")
+_BACKEND_KEYS = {b.lower(): b for b in BACKENDS}
+_BACKEND_KEYS.update({"ideal": "IdealGas", "ideal_gas": "IdealGas", "ideal-gas": "IdealGas"})
+
+_INSTANCES: dict[tuple[str, str], Medium] = {}
+_NAMES: dict[str, str] | None = None  # normalised spelling -> canonical CoolProp name
+_FLUIDS: list[str] = []
+
+
+def _norm(name: str) -> str:
+    return re.sub(r"[\s\-_]", "", name).lower()
+
+
+def _name_table() -> dict[str, str]:
+    """Normalised spellings (names and aliases) -> canonical CoolProp names, built once."""
+    global _NAMES
+    if _NAMES is None:
+        fluids = [f for f in CP.get_global_param_string("FluidsList").split(",") if f]
+        table: dict[str, str] = {}
+        ambiguous: set[str] = set()
+        for f in fluids:
+            try:
+                aliases = CP.get_fluid_param_string(f, "aliases").split(",")
+            except BACKEND_ERRORS:
+                aliases = []
+            for a in aliases:
+                k = _norm(a)
+                if not k:
+                    continue
+                if k in table and table[k] != f:
+                    ambiguous.add(k)
+                table[k] = f
+        for k in ambiguous:
+            del table[k]
+        for f in fluids:  # canonical names win over any alias
+            table[_norm(f)] = f
+        _FLUIDS[:] = sorted(fluids)
+        _NAMES = table
+    return _NAMES
+
+
+def canonical_fluid_name(fluid: str) -> str:
+    """Return CoolProp's canonical name for ``fluid`` (case, '-', '_' and aliases ignored).
+
+    ``"water"``, ``"H2O"``, ``"R718"`` -> ``"Water"``; ``"r-134a"`` -> ``"R134a"``;
+    ``"co2"`` -> ``"CarbonDioxide"``.
+
+    Raises
+    ------
+    dnasim.errors.PlantError
+        For an unknown name, with close matches and the way to list all names.
+    """
+    table = _name_table()
+    key = _norm(fluid)
+    if key in table:
+        return table[key]
+    close = difflib.get_close_matches(key, list(table), n=5, cutoff=0.6)
+    suggestions = []
+    for k in close:
+        if table[k] not in suggestions:
+            suggestions.append(table[k])
+    hint = f" Did you mean {', '.join(repr(s) for s in suggestions)}?" if suggestions else ""
+    raise PlantError(
+        f"unknown fluid {fluid!r}.{hint} Fluids are spelled as CoolProp names or aliases "
+        "(case, '-' and '_' do not matter), e.g. 'Water', 'Air', 'R134a', 'Nitrogen', "
+        "'CarbonDioxide'; the full list is "
+        "CoolProp.CoolProp.get_global_param_string('FluidsList'). A backend may be given as a "
+        "prefix, e.g. 'IF97::Water', 'HEOS::Air', 'BICUBIC&HEOS::Water'."
+    )
+
+
+def _canonical_backend(backend: str) -> str:
+    b = _BACKEND_KEYS.get(backend.strip().lower())
+    if b is None:
+        raise PlantError(f"unknown fluid backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    return b
+
+
+def get_medium(fluid: str, backend: str | None = None) -> Medium:
+    """Return the shared medium for ``fluid`` and ``backend``.
+
+    One instance exists per (canonical fluid, backend), so every component
+    using e.g. water shares one property cache.
+
+    Parameters
+    ----------
+    fluid : str
+        A CoolProp fluid name or alias, case-insensitive (``"Water"``,
+        ``"water"``, ``"H2O"``, ``"R134a"``, ``"Air"``, ...), optionally with a
+        CoolProp-style backend prefix (``"IF97::Water"``, ``"HEOS::Water"``,
+        ``"BICUBIC&HEOS::Water"``).
+    backend : str, optional
+        ``"IF97"`` (water only), ``"HEOS"``, ``"BICUBIC&HEOS"``, ``"TTSE&HEOS"``
+        or ``"IdealGas"`` (air only). Defaults: ``"IF97"`` for water,
+        ``"IdealGas"`` for air (constant-cp ideal gas,
+        :class:`~dnasim.media.IdealGas` with R = 287.05 J/(kg K),
+        cp = 1006 J/(kg K)), ``"HEOS"`` for every other fluid.
+
+    Returns
+    -------
+    Medium
+        :class:`~dnasim.media.if97.IF97Water`, :class:`~dnasim.media.IdealGas`
+        or :class:`~dnasim.media.coolprop_medium.CoolPropMedium`.
+
+    Raises
+    ------
+    dnasim.errors.PlantError
+        Unknown fluid name (with "did you mean" suggestions), unknown backend,
+        conflicting backends, a backend that does not cover the fluid.
+    """
+    if not isinstance(fluid, str):
+        raise PlantError(f"fluid name must be a string, got {fluid!r}")
+    name = fluid.strip()
+    if "::" in name:
+        prefix, name = name.split("::", 1)
+        prefix_b = _canonical_backend(prefix)
+        if backend is not None and _canonical_backend(backend) != prefix_b:
+            raise PlantError(
+                f"fluid {fluid!r} names backend {prefix_b!r} but backend={backend!r} was given"
+            )
+        backend = prefix_b
+    canon = canonical_fluid_name(name)
+    if backend is None:
+        b = {"Water": "IF97", "Air": "IdealGas"}.get(canon, "HEOS")
+    else:
+        b = _canonical_backend(backend)
+    key = (canon, b)
+    medium = _INSTANCES.get(key)
+    if medium is None:
+        medium = _create(canon, b)
+        _INSTANCES[key] = medium
+    return medium
+
+
+def _create(canon: str, backend: str) -> Medium:
+    if backend == "IF97":
+        if canon != "Water":
+            raise PlantError(f"backend 'IF97' covers only water, not {canon!r}; use backend='HEOS'")
+        from dnasim.media.if97 import IF97Water
+
+        return IF97Water()
+    if backend == "IdealGas":
+        if canon != "Air":
+            raise PlantError(
+                f"backend 'IdealGas' is predefined only for air, not {canon!r}; construct "
+                "dnasim.media.IdealGas(name, R=..., cp=...) directly, or use backend='HEOS'"
+            )
+        from dnasim.media.ideal_gas import IdealGas
+
+        return IdealGas("Air")
+    from dnasim.media.coolprop_medium import CoolPropMedium
+
+    try:
+        return CoolPropMedium(canon, backend)
+    except BACKEND_ERRORS as exc:
+        raise PlantError(
+            f"CoolProp cannot set up fluid {canon!r} with backend {backend!r}: {exc}"
+        ) from exc

@@ -1,0 +1,441 @@
+"""Results on disk: streaming CSV while the run goes on, events and steps CSV, PNG plots.
+
+Nothing is lost when a run stops early: :class:`StreamingCSV` keeps its own
+buffer of *complete* lines and hands it to the operating system in one
+``write`` every ``flush_rows`` rows or ``flush_seconds`` seconds, so the file on
+disk always ends with a whole row, even when the process is killed. ``close``
+flushes and ``fsync``s.
+
+matplotlib is imported only inside the plotting functions (Agg backend), so
+``dnasim --help`` does not pay for it.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import re
+import time
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+__all__ = [
+    "StreamingCSV",
+    "column_header",
+    "parse_column_header",
+    "format_value",
+    "read_results_csv",
+    "write_events_csv",
+    "write_steps_csv",
+    "select_variables",
+    "plot_variables",
+    "plot_steps",
+    "EVENT_COLUMNS",
+    "STEP_COLUMNS",
+]
+
+EVENT_COLUMNS = ("event", "iteration", "time", "switch_value", "component", "switch")
+STEP_COLUMNS = ("time", "step_size", "order")
+
+
+def column_header(name: str, unit: str | None) -> str:
+    """``pipe1.T_out [K]``; a dimensionless quantity gets ``[-]``."""
+    if unit is None or unit == "":
+        unit = "-"
+    if unit == "1":
+        unit = "-"
+    return f"{name} [{unit}]"
+
+
+_HEADER_RE = re.compile(r"^(.*?)\s*\[([^\[\]]*)\]\s*$")
+
+
+def parse_column_header(header: str) -> tuple[str, str]:
+    """Inverse of :func:`column_header`: ``"pipe1.T_out [K]"`` -> ``("pipe1.T_out", "K")``."""
+    m = _HEADER_RE.match(header)
+    if m:
+        return m.group(1), m.group(2)
+    return header.strip(), ""
+
+
+def format_value(x) -> str:
+    """Shortest text that reads back as the same float (``repr``), empty for missing."""
+    if x is None:
+        return ""
+    x = float(x)
+    if math.isnan(x):
+        return "nan"
+    return repr(x)
+
+
+class _SignalsBlocked:
+    """Hold SIGINT/SIGTERM back while whole lines go to disk (main thread, POSIX).
+
+    The signal is delivered, and its Python handler runs, right after the block:
+    a Ctrl-C can stop a run between two flushes but never in the middle of one.
+    """
+
+    def __enter__(self):
+        import signal
+        import threading
+
+        self.old = None
+        if (
+            hasattr(signal, "pthread_sigmask")
+            and threading.current_thread() is threading.main_thread()
+        ):
+            self.old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+        return self
+
+    def __exit__(self, *exc):
+        if self.old is not None:
+            import signal
+
+            signal.pthread_sigmask(signal.SIG_SETMASK, self.old)
+
+
+class StreamingCSV:
+    """A CSV file written row by row while a simulation runs.
+
+    >>> with StreamingCSV("out.csv", ["time [s]", "pipe.T_out [K]"]) as w:  # doctest: +SKIP
+    ...     w.write_row([0.0, 300.0])
+
+    Rows are kept in memory as complete lines and written with ``os.write`` every
+    ``flush_rows`` rows or ``flush_seconds`` seconds, whichever comes first, with
+    SIGINT and SIGTERM held back during the write. The file therefore always holds
+    the header and a whole number of rows, and ``last_time`` is the time of the last
+    row on disk (the first column).
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike,
+        header: Sequence[str],
+        *,
+        flush_rows: int = 200,
+        flush_seconds: float = 1.0,
+    ):
+        self.path = Path(path)
+        self.header = list(header)
+        self.ncols = len(self.header)
+        self.flush_rows = max(1, int(flush_rows))
+        self.flush_seconds = float(flush_seconds)
+        self.rows_written = 0  # rows on disk
+        self.last_time: float | None = None  # first column of the last row on disk
+        self._pending: list[tuple[float, str]] = []
+        self._last_flush = time.monotonic()
+        self._fd: int | None = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        with _SignalsBlocked():
+            self._write_all(_csv_line(self.header))
+
+    def _write_all(self, text: str) -> None:
+        data = text.encode("utf-8")
+        view = memoryview(data)
+        while view:
+            n = os.write(self._fd, view)
+            view = view[n:]
+
+    @property
+    def closed(self) -> bool:
+        return self._fd is None
+
+    def write_row(self, values: Sequence[float]) -> None:
+        if self._fd is None:
+            raise ValueError(f"{self.path} is closed")
+        if len(values) != self.ncols:
+            raise ValueError(f"row of {len(values)} values for {self.ncols} columns in {self.path}")
+        line = ",".join(format_value(v) for v in values) + "\n"
+        self._pending.append((float(values[0]), line))
+        if (
+            len(self._pending) >= self.flush_rows
+            or time.monotonic() - self._last_flush >= self.flush_seconds
+        ):
+            self.flush()
+
+    def flush(self) -> None:
+        """Hand the buffered rows to the operating system, whole lines only."""
+        if self._fd is None:
+            return
+        with _SignalsBlocked():
+            if self._pending:
+                rows = self._pending
+                self._write_all("".join(line for _, line in rows))
+                self.rows_written += len(rows)
+                self.last_time = rows[-1][0]
+                self._pending = []
+            self._last_flush = time.monotonic()
+
+    def close(self) -> None:
+        """Flush, fsync and close. Safe to call twice."""
+        if self._fd is None:
+            return
+        try:
+            self.flush()
+            try:
+                os.fsync(self._fd)
+            except OSError:
+                pass
+        finally:
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> StreamingCSV:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self):  # pragma: no cover - last resort
+        try:
+            self.close()
+        except Exception:
+            pass
+
+
+def _csv_line(fields: Iterable) -> str:
+    out = []
+    for f in fields:
+        s = str(f)
+        if any(c in s for c in ',"\n\r'):
+            s = '"' + s.replace('"', '""') + '"'
+        out.append(s)
+    return ",".join(out) + "\n"
+
+
+def _write_table(path: str | os.PathLike, header: Sequence[str], rows: Iterable[Sequence]) -> None:
+    """Write a small CSV completely: temporary file, fsync, rename."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", newline="", encoding="utf-8") as f:
+        f.write(_csv_line(header))
+        for row in rows:
+            f.write(
+                _csv_line(
+                    format_value(v) if isinstance(v, float) else ("" if v is None else v)
+                    for v in row
+                )
+            )
+        f.flush()
+        try:
+            os.fsync(f.fileno())
+        except OSError:
+            pass
+    os.replace(tmp, path)
+
+
+def _split_event_name(entry: dict) -> tuple[str, str]:
+    comp = entry.get("component")
+    switch = entry.get("switch")
+    name = entry.get("name") or ""
+    if comp is None or switch is None:
+        if "." in name:
+            c, s = name.rsplit(".", 1)
+        else:
+            c, s = "", name
+        comp = c if comp is None else comp
+        switch = s if switch is None else switch
+    return str(comp), str(switch)
+
+
+def event_rows(event_log: Sequence[dict]) -> list[tuple]:
+    """One row per iterate of each located discontinuity (the seed's Table 10.1).
+
+    ``event`` numbers the discontinuities in the order they were located (1, 2, ...);
+    ``iteration`` numbers the iterates of one location (1 is the last accepted step
+    before the sign change, 2 the step that detected it, then the refinements).
+    """
+    rows = []
+    for k, entry in enumerate(event_log, start=1):
+        comp, switch = _split_event_name(entry)
+        iterates = entry.get("iterates") or []
+        if not iterates and entry.get("t") is not None:
+            iterates = [(entry["t"], float("nan"))]
+        for i, it in enumerate(iterates, start=1):
+            t, g = it[0], it[1]
+            rows.append((k, i, float(t), float(g), comp, switch))
+    return rows
+
+
+def write_events_csv(path: str | os.PathLike, event_log: Sequence[dict]) -> int:
+    """Write ``events.csv``; returns the number of rows."""
+    rows = event_rows(event_log or [])
+    _write_table(path, EVENT_COLUMNS, rows)
+    return len(rows)
+
+
+def step_rows(step_history) -> list[tuple]:
+    rows = []
+    if step_history is None:
+        return rows
+    for rec in step_history:
+        t, h, order = rec[0], rec[1], float(rec[2])
+        rows.append((float(t), float(h), int(round(order)) if math.isfinite(order) else None))
+    return rows
+
+
+def write_steps_csv(path: str | os.PathLike, step_history) -> int:
+    """Write ``steps.csv`` (``time,step_size,order``, one row per accepted step)."""
+    rows = step_rows(step_history)
+    _write_table(path, STEP_COLUMNS, rows)
+    return len(rows)
+
+
+def read_results_csv(path: str | os.PathLike):
+    """Read a ``results.csv`` written by :class:`StreamingCSV`.
+
+    Returns ``(names, units, data)`` with ``data`` a dict name -> numpy array; the
+    first name is ``time``. A final partial line (from a machine crash) is ignored.
+    """
+    import numpy as np
+
+    path = Path(path)
+    with open(path, newline="", encoding="utf-8") as f:
+        text = f.read()
+    lines = text.splitlines(keepends=True)
+    if not lines:
+        raise ValueError(f"{path} is empty")
+    if not lines[-1].endswith("\n") and len(lines) > 1:
+        lines = lines[:-1]
+    reader = csv.reader(lines)
+    header = next(reader)
+    names, units = zip(*(parse_column_header(h) for h in header), strict=True)
+    rows = []
+    for lineno, row in enumerate(reader, start=2):
+        if not row:
+            continue
+        if len(row) != len(header):
+            raise ValueError(f"{path}, line {lineno}: {len(row)} values for {len(header)} columns")
+        rows.append([float(v) if v != "" else float("nan") for v in row])
+    arr = np.array(rows, dtype=float).reshape(-1, len(header))
+    data = {n: arr[:, j] for j, n in enumerate(names)}
+    return list(names), dict(zip(names, units, strict=True)), data
+
+
+def select_variables(names: Sequence[str], patterns: Sequence[str] | None) -> list[str]:
+    """Names matching any of the shell-style ``patterns`` (``pipe1.*``, ``*.T_out``).
+
+    A pattern without wildcards also matches as a prefix component (``pipe1`` selects
+    every ``pipe1.*``). No patterns: every name. Order follows ``names``.
+    """
+    import fnmatch
+
+    if not patterns:
+        return list(names)
+    out = []
+    for n in names:
+        for p in patterns:
+            if fnmatch.fnmatchcase(n, p) or n.startswith(p + "."):
+                out.append(n)
+                break
+    return out
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _group_by_unit(names: Sequence[str], units: dict[str, str]) -> list[tuple[str, list[str]]]:
+    groups: dict[str, list[str]] = {}
+    for n in names:
+        groups.setdefault(units.get(n, ""), []).append(n)
+    return list(groups.items())
+
+
+def plot_variables(
+    t,
+    data: dict,
+    names: Sequence[str],
+    units: dict[str, str],
+    path: str | os.PathLike,
+    *,
+    title: str | None = None,
+    event_times: Sequence[float] = (),
+    max_lines_per_axis: int = 12,
+) -> Path:
+    """Variables over time, one panel per unit (the seed's Figs. 10.2, 10.5, 10.6)."""
+    plt = _pyplot()
+    groups = _group_by_unit(names, units)
+    # keep panels readable: split big groups
+    panels: list[tuple[str, list[str]]] = []
+    for unit, group in groups:
+        for i in range(0, len(group), max_lines_per_axis):
+            panels.append((unit, group[i : i + max_lines_per_axis]))
+    if not panels:
+        panels = [("", [])]
+    t_scale, t_label = _time_axis(t)
+    fig, axes = plt.subplots(
+        len(panels), 1, sharex=True, figsize=(9, 2.6 * len(panels) + 1.0), squeeze=False
+    )
+    for ax, (unit, group) in zip(axes[:, 0], panels, strict=True):
+        for n in group:
+            ax.plot(t / t_scale, data[n], label=n, lw=1.2)
+        for te in event_times:
+            ax.axvline(te / t_scale, color="0.5", ls=":", lw=0.8)
+        ax.set_ylabel(f"[{unit or '-'}]")
+        ax.grid(True, alpha=0.3)
+        if group:
+            ax.legend(fontsize=8, loc="best")
+    axes[-1, 0].set_xlabel(t_label)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def plot_steps(
+    step_history,
+    path: str | os.PathLike,
+    *,
+    title: str | None = None,
+    event_times: Sequence[float] = (),
+) -> Path:
+    """Step size (log scale) and order over time (the seed's Figs. 10.3 and 10.7)."""
+    import numpy as np
+
+    plt = _pyplot()
+    rows = np.array(
+        [(t, h, math.nan if q is None else q) for t, h, q in step_rows(step_history)], dtype=float
+    ).reshape(-1, 3)
+    fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(9, 5.5))
+    t = rows[:, 0]
+    t_scale, t_label = _time_axis(t)
+    if len(rows):
+        ax1.semilogy(t / t_scale, rows[:, 1], ".-", ms=3, lw=0.8)
+        ax2.step(t / t_scale, rows[:, 2], where="post", lw=1.0)
+    for te in event_times:
+        for ax in (ax1, ax2):
+            ax.axvline(te / t_scale, color="r", ls=":", lw=0.8)
+    ax1.set_ylabel("step size [s]")
+    ax2.set_ylabel("order")
+    ax2.set_xlabel(t_label)
+    ax2.set_yticks(range(1, 7))
+    for ax in (ax1, ax2):
+        ax.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _time_axis(t) -> tuple[float, str]:
+    try:
+        span = float(t[-1]) if len(t) else 0.0
+    except TypeError:
+        span = 0.0
+    if span >= 3 * 3600:
+        return 3600.0, "time [h]"
+    if span >= 3 * 60:
+        return 60.0, "time [min]"
+    return 1.0, "time [s]"

@@ -1,0 +1,1229 @@
+"""TOML plant files: read, validate (before any numerics), build a ``Plant``.
+
+The schema is documented in ``docs/plant_files.md``. In short::
+
+    [plant]
+    name = "attemperator"
+
+    [simulation]
+    t_end = "20 min"
+    output_interval = "1 s"      # optional; default: every accepted step
+    rtol = 1e-6
+    atol = 1e-8
+    max_order = 4
+    start = "steady"             # or "given"
+
+    [components.steam]
+    type = "PressureBoundary"
+    p = "120 bar"
+    T = { type = "step", t0 = "60 s", before = "540 degC", after = "560 degC" }
+    ports = { outlet = "n1" }                 # fluid port -> node name
+
+    [components.pi]
+    type = "PIController"
+    inputs = { measurement = "sensor.T" }     # signal input <- "component.output"
+
+Every problem is reported as a :class:`~dnasim.errors.PlantError` whose message
+names the file, the table, the key and (when it can be found) the line, one
+paragraph per problem; all problems found are reported together.
+"""
+
+from __future__ import annotations
+
+import difflib
+import inspect
+import math
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from dnasim.errors import PlantError
+from dnasim.units import UnitError, parse_unit, to_si
+
+__all__ = [
+    "load_plant",
+    "load",
+    "loads",
+    "LoadedPlant",
+    "SimulationSettings",
+    "ComponentSpec",
+    "PlantSpec",
+    "read_plant_file",
+    "parse_plant",
+    "build_plant",
+    "component_info",
+    "RESERVED_KEYS",
+    "TIME_FUNCTION_TYPES",
+]
+
+#: keys of a component table that are not parameters
+RESERVED_KEYS = ("type", "ports", "inputs", "description")
+
+#: time-function tables: type -> (required keys, optional keys); values of keys in
+#: ``_TF_VALUE_KEYS`` are in the parameter's unit, the others are times [s]
+TIME_FUNCTION_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "constant": (("value",), ()),
+    "step": (("t0", "before", "after"), ()),
+    "ramp": (("t0", "t1", "start", "end"), ()),
+    "table": (("times", "values"), ()),
+    "sine": (("mean", "amplitude", "period"), ("phase",)),
+}
+_TF_VALUE_KEYS = {"value", "before", "after", "start", "end", "values", "mean"}
+_TF_DIFFERENCE_KEYS = {"amplitude"}
+
+SIMULATION_KEYS = {
+    "t_end": "end time of the simulation [s] (required)",
+    "t_start": "start time [s] (default 0)",
+    "output_interval": "time between rows of results.csv [s] (default: every accepted step)",
+    "rtol": "relative error tolerance (default 1e-6)",
+    "atol": "absolute error tolerance (default 1e-8)",
+    "max_order": "maximum BDF order, 1..5 (default 4)",
+    "start": '"steady" (steady state at t_start) or "given" (initial states from parameters)',
+    "max_step": "largest step size [s] (default: unlimited)",
+}
+_TOP_LEVEL = ("plant", "simulation", "components")
+
+
+# --------------------------------------------------------------------------- data
+
+
+@dataclass
+class SimulationSettings:
+    """The ``[simulation]`` table, in SI."""
+
+    t_end: float = 100.0
+    t_start: float = 0.0
+    output_interval: float | None = None
+    rtol: float = 1e-6
+    atol: float = 1e-8
+    max_order: int = 4
+    start: str = "steady"
+    max_step: float | None = None
+
+    def t_eval(self):
+        """Output times for ``output_interval`` (None: every accepted step)."""
+        if self.output_interval is None:
+            return None
+        import numpy as np
+
+        n = int(math.floor((self.t_end - self.t_start) / self.output_interval + 1e-9))
+        t = self.t_start + self.output_interval * np.arange(n + 1)
+        if t[-1] < self.t_end - 1e-9 * max(1.0, abs(self.t_end)):
+            t = np.append(t, self.t_end)
+        return t
+
+
+@dataclass
+class ComponentSpec:
+    name: str
+    type: str
+    cls: type
+    params: dict[str, Any] = field(default_factory=dict)
+    ports: dict[str, str] = field(default_factory=dict)
+    inputs: dict[str, str] = field(default_factory=dict)
+    description: str = ""
+    instance: Any = None
+    fluid_ports: list[str] = field(default_factory=list)
+    signal_inputs: list[str] = field(default_factory=list)
+    signal_outputs: list[str] = field(default_factory=list)
+
+
+@dataclass
+class PlantSpec:
+    """A validated plant file, before any ``Plant`` is built."""
+
+    path: str
+    name: str
+    description: str
+    simulation: SimulationSettings
+    components: list[ComponentSpec]
+    medium: str | None = None
+
+
+@dataclass
+class LoadedPlant:
+    """What ``dnasim run`` works with: the plant, its settings and where it came from."""
+
+    plant: Any
+    simulation: SimulationSettings
+    spec: PlantSpec
+    path: str
+
+    def simulate(self, **overrides):
+        """Run ``plant.simulate`` with the file's settings (keywords override them)."""
+        return simulate_plant(self.plant, self.simulation, **overrides)
+
+
+# --------------------------------------------------------------------------- errors
+
+
+class _Errors:
+    """Collects problems; each is one paragraph naming file, table, key and line."""
+
+    def __init__(self, path: str, lines: _LineIndex | None):
+        self.path = path
+        self.lines = lines
+        self.items: list[str] = []
+
+    def add(self, table: Sequence[str], key: str | None, message: str) -> None:
+        where = [self.path]
+        table = tuple(table)
+        if table:
+            where.append("[" + ".".join(_quote_key(k) for k in table) + "]")
+        if key is not None:
+            where.append(f"key '{key}'")
+        line = self.lines.find(table, key) if self.lines else None
+        if line:
+            where.append(f"line {line}")
+        self.items.append(", ".join(where) + ": " + message)
+
+    def raise_if_any(self) -> None:
+        if self.items:
+            err = PlantError("\n\n".join(self.items))
+            err.errors = list(self.items)
+            raise err
+
+
+def _quote_key(k: str) -> str:
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else '"' + k + '"'
+
+
+def _suggest(word: str, choices) -> str:
+    close = difflib.get_close_matches(str(word), list(choices), n=1, cutoff=0.6)
+    if not close:
+        low = {c.lower(): c for c in choices}
+        if str(word).lower() in low:
+            close = [low[str(word).lower()]]
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
+class _LineIndex:
+    """Best-effort map (table path, key) -> line number, by scanning the TOML text."""
+
+    _HEADER = re.compile(r"^\s*\[\[?\s*(.+?)\s*\]\]?\s*(#.*)?$")
+    _KEY = re.compile(
+        r"^\s*((?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*'))*)\s*="
+    )
+    _INLINE_KEY = re.compile(r"[{,]\s*([A-Za-z0-9_-]+|\"[^\"]*\")\s*=")
+
+    def __init__(self, text: str):
+        self.map: dict[tuple[str, ...], int] = {}
+        table: tuple[str, ...] = ()
+        in_multiline = None
+        for lineno, line in enumerate(text.splitlines(), start=1):
+            if in_multiline:
+                if in_multiline in line:
+                    in_multiline = None
+                continue
+            m = self._HEADER.match(line)
+            if m and not self._KEY.match(line):
+                table = self._split(m.group(1))
+                self.map.setdefault(table, lineno)
+                continue
+            m = self._KEY.match(line)
+            if m:
+                path = table + self._split(m.group(1))
+                self.map.setdefault(path, lineno)
+                rest = line[m.end() :]
+                for q in ('"""', "'''"):
+                    if rest.count(q) == 1:
+                        in_multiline = q
+                if "{" in rest:
+                    for km in self._INLINE_KEY.finditer(rest):
+                        self.map.setdefault(path + (km.group(1).strip("\"'"),), lineno)
+
+    @staticmethod
+    def _split(dotted: str) -> tuple[str, ...]:
+        parts = re.findall(r"\"[^\"]*\"|'[^']*'|[^.\s]+", dotted)
+        return tuple(p.strip("\"'") for p in parts)
+
+    def find(self, table: Sequence[str], key: str | None) -> int | None:
+        path = tuple(table) + ((key,) if key is not None else ())
+        while path:
+            if path in self.map:
+                return self.map[path]
+            path = path[:-1]
+        return None
+
+
+# --------------------------------------------------------------------------- component metadata
+
+
+def _registry() -> dict[str, type]:
+    try:
+        from dnasim.components import REGISTRY
+    except ImportError:
+        try:  # the package's __init__ may not import everything yet
+            from dnasim.components.base import REGISTRY
+        except ImportError as exc:  # pragma: no cover - during development only
+            raise PlantError(f"the component library cannot be imported: {exc}") from exc
+    return REGISTRY
+
+
+def _names(obj) -> list[str]:
+    """Port names from a list/tuple/dict of names or port objects."""
+    if obj is None:
+        return []
+    if isinstance(obj, Mapping):
+        return [str(k) for k in obj]
+    out = []
+    for p in obj:
+        out.append(p if isinstance(p, str) else str(getattr(p, "name", p)))
+    return out
+
+
+def _first_attr(cls, names):
+    for n in names:
+        v = getattr(cls, n, None)
+        if v is not None and not callable(v) or isinstance(v, list | tuple | dict):
+            return v
+    return None
+
+
+def fluid_ports(cls) -> list[str]:
+    return _names(_first_attr(cls, ("FLUID_PORTS", "PORTS", "fluid_ports", "ports")))
+
+
+def signal_inputs(cls) -> list[str]:
+    return _names(
+        _first_attr(cls, ("SIGNAL_INPUTS", "INPUTS", "signal_inputs", "inputs", "SIGNALS_IN"))
+    )
+
+
+def signal_outputs(cls) -> list[str]:
+    return _names(
+        _first_attr(cls, ("SIGNAL_OUTPUTS", "OUTPUTS", "signal_outputs", "outputs", "SIGNALS_OUT"))
+    )
+
+
+def params_of(cls) -> list:
+    return list(getattr(cls, "PARAMS", ()) or ())
+
+
+def _is_required(p) -> bool:
+    d = getattr(p, "default", None)
+    try:
+        from dnasim.components import REQUIRED
+    except ImportError:
+        REQUIRED = None  # noqa: N806
+    if REQUIRED is not None and d is REQUIRED:
+        return True
+    return type(d).__name__.upper().startswith("REQUIRED") or repr(d).upper() == "REQUIRED"
+
+
+def _param_kind(p) -> str:
+    return getattr(p, "kind", "number") or "number"
+
+
+def _param_unit(p) -> str:
+    return getattr(p, "unit", "1") or "1"
+
+
+def _port_info(ports) -> list[dict]:
+    out = []
+    for p in ports or ():
+        if isinstance(p, str):
+            out.append({"name": p, "role": "", "unit": "", "doc": ""})
+        else:
+            out.append(
+                {
+                    "name": str(getattr(p, "name", p)),
+                    "role": str(getattr(p, "role", "") or ""),
+                    "unit": str(getattr(p, "unit", "") or ""),
+                    "doc": str(getattr(p, "doc", "") or ""),
+                }
+            )
+    return out
+
+
+def component_info(cls) -> dict:
+    """Ports, parameters (unit, default, range, doc) and equations of a component class.
+
+    The equations are those its docstring lists (the component library documents
+    them there); ``EQUATIONS`` on the class, if present, is used as well."""
+    params = []
+    for p in params_of(cls):
+        params.append(
+            {
+                "name": p.name,
+                "unit": _param_unit(p),
+                "required": _is_required(p),
+                "default": None if _is_required(p) else getattr(p, "default", None),
+                "min": getattr(p, "min", None),
+                "max": getattr(p, "max", None),
+                "doc": getattr(p, "doc", "") or "",
+                "time_function": bool(getattr(p, "time_function", False)),
+                "kind": _param_kind(p),
+                "choices": getattr(p, "choices", None),
+            }
+        )
+    eqs = getattr(cls, "EQUATIONS", None)
+    if eqs is None:
+        eqs = []
+    elif isinstance(eqs, str):
+        eqs = [e for e in eqs.strip().splitlines() if e.strip()]
+    fports, sins = fluid_ports(cls), signal_inputs(cls)
+    if not any(p["required"] for p in params):
+        # ports may depend on parameters (a Mixer's inlets): list the defaults' ports
+        try:
+            inst = cls("example")
+            fports, sins = _names(inst.fluid_ports()), _names(inst.signal_inputs())
+        except Exception:
+            pass
+    return {
+        "type": cls.__name__,
+        "doc": inspect.cleandoc(cls.__doc__ or ""),
+        "fluid_ports": fports,
+        "signal_inputs": sins,
+        "signal_outputs": signal_outputs(cls),
+        "fluid_port_info": _port_info(getattr(cls, "FLUID_PORTS", ())),
+        "signal_input_info": _port_info(getattr(cls, "SIGNAL_INPUTS", ())),
+        "signal_output_info": _port_info(getattr(cls, "SIGNAL_OUTPUTS", ())),
+        "params": params,
+        "equations": list(eqs),
+    }
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def read_plant_file(path: str | Path) -> tuple[dict, str]:
+    """Read and decode a TOML file; malformed TOML becomes a ``PlantError`` with its line."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise PlantError(f"{path}: no such plant file") from None
+    except IsADirectoryError:
+        raise PlantError(f"{path}: is a directory, not a plant file") from None
+    except OSError as exc:
+        raise PlantError(f"{path}: cannot read the plant file: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise PlantError(
+            f"{path}: not a UTF-8 text file ({exc.reason} at byte {exc.start})"
+        ) from None
+    return _decode(text, str(path)), text
+
+
+def _decode(text: str, path: str) -> dict:
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
+        why = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg).strip()
+        where = f"{path}"
+        if m:
+            where += f", line {m.group(1)}, column {m.group(2)}"
+        elif "end of document" in msg:
+            where += f", line {text.count(chr(10)) + 1}"
+        if "Cannot declare" in why or "Cannot overwrite" in why:
+            why += " (a name is used twice: each component table and each key may appear once)"
+        raise PlantError(f"{where}: malformed TOML: {why}") from None
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def _type_name(v) -> str:
+    if isinstance(v, bool):
+        return "a boolean"
+    if isinstance(v, int | float):
+        return "a number"
+    if isinstance(v, str):
+        return "a string"
+    if isinstance(v, list):
+        return "an array"
+    if isinstance(v, dict):
+        return "a table"
+    return type(v).__name__
+
+
+def _as_text(v, errors: _Errors, table, key) -> str | None:
+    if not isinstance(v, str):
+        errors.add(table, key, f"expected a string, got {_type_name(v)} ({v!r})")
+        return None
+    return v
+
+
+def _quantity(v, unit, errors, table, key, *, difference=False, signal_units=()) -> float | None:
+    """A number or unit string in ``unit`` (SI); ``None`` after reporting an error.
+
+    ``difference``: a temperature difference ("10 degC" is 10 K).
+    ``signal_units``: units of the signals linked into the component; a controller's
+    dimensionless parameter may then also carry the signal's unit (setpoint =
+    "540 degC") or its inverse (Kp = "0.02 1/K"), converted to SI.
+    """
+    if isinstance(v, dict | list):
+        errors.add(
+            table,
+            key,
+            f"expected a number or a string with a unit such as '{_example(unit)}', "
+            f"got {_type_name(v)}",
+        )
+        return None
+    targets = [unit]
+    for su in signal_units:
+        if su and parse_unit(su).dims != parse_unit("1").dims:
+            targets += [f"({unit}).({su})", f"({unit})/({su})"]
+    first_error = None
+    for target in targets:
+        try:
+            return _convert_value(v, target, difference)
+        except UnitError as exc:
+            if first_error is None:
+                first_error = exc
+            if "dimension" not in str(exc):
+                break
+    msg = str(first_error)
+    if len(targets) > 1 and "dimension" in msg:
+        msg += (
+            f" (as this component reads a signal in {', '.join(sorted(set(signal_units)))}, "
+            "its dimensionless parameters may also carry that unit or its inverse)"
+        )
+    errors.add(table, key, msg)
+    return None
+
+
+def _convert_value(v, unit: str, difference: bool) -> float:
+    if difference and isinstance(v, str):
+        from dnasim.units import Unit, convert, has_unit, parse_quantity
+
+        number, u = parse_quantity(v)
+        if not has_unit(v):
+            return float(number)
+        if u.offset:  # "10 degC" as a difference is 10 K
+            u = Unit(u.dims, u.scale)
+        return float(convert(number, u, unit))
+    return to_si(v, unit)
+
+
+def _example(unit: str) -> str:
+    return {
+        "Pa": "120 bar",
+        "K": "540 degC",
+        "kg/s": "3.6 t/h",
+        "s": "15 min",
+        "J/kg": "2800 kJ/kg",
+        "m3": "2.5 m3",
+        "m2": "30 m2",
+        "m": "12 m",
+        "W/(m2.K)": "50 W/(m2.K)",
+        "1": "0.5",
+    }.get(unit, f"1 {unit}")
+
+
+_POSITIVE = {"Pa": "pressure", "m3": "volume", "m2": "area", "kg": "mass", "K": "temperature"}
+
+
+def _check_range(x: float, p, errors, table, key, shown) -> None:
+    """Bounds of the parameter; pressures, volumes, areas, masses and absolute
+    temperatures must also be > 0 when the component gives no lower bound or 0."""
+    unit = _param_unit(p)
+    lo = getattr(p, "min", None)
+    hi = getattr(p, "max", None)
+    name = p.name
+    what = _POSITIVE.get(unit)
+    if what is not None and (lo is None or lo <= 0) and x <= 0:
+        errors.add(
+            table,
+            key,
+            f"{shown} is out of the physical range: {name} is a {what} and must be "
+            f"greater than 0 {unit} (got {x:g} {unit})",
+        )
+        return
+    if lo is not None and x < lo:
+        errors.add(
+            table,
+            key,
+            f"{shown} is out of range: {name} must be at least {lo:g} {unit} (got {x:g} {unit})",
+        )
+    if hi is not None and x > hi:
+        errors.add(
+            table,
+            key,
+            f"{shown} is out of range: {name} must be at most {hi:g} {unit} (got {x:g} {unit})",
+        )
+
+
+def _time_function(v: dict, p, errors: _Errors, table, key, signal_units=()):
+    """Build a time function from an inline table ``{type = "step", ...}``."""
+    from dnasim import timefunctions as tf
+
+    sub = tuple(table) + (key,)
+    unit = _param_unit(p)
+    kind = v.get("type")
+    if kind is None:
+        errors.add(
+            sub,
+            "type",
+            "a time function needs 'type', one of " + ", ".join(TIME_FUNCTION_TYPES),
+        )
+        return None
+    if not isinstance(kind, str) or kind.lower() not in TIME_FUNCTION_TYPES:
+        errors.add(
+            sub,
+            "type",
+            f"unknown time function {kind!r}; known: "
+            + ", ".join(TIME_FUNCTION_TYPES)
+            + (_suggest(kind, TIME_FUNCTION_TYPES) if isinstance(kind, str) else ""),
+        )
+        return None
+    kind = kind.lower()
+    required, optional = TIME_FUNCTION_TYPES[kind]
+    n0 = len(errors.items)
+    for k in v:
+        if k != "type" and k not in required and k not in optional:
+            errors.add(
+                sub,
+                k,
+                f"unknown key for a {kind} time function; expected "
+                + ", ".join(required + optional)
+                + _suggest(k, required + optional),
+            )
+    for k in required:
+        if k not in v:
+            errors.add(sub, k, f"missing: a {kind} time function needs " + ", ".join(required))
+    if len(errors.items) > n0:
+        return None
+
+    def conv(k, x):
+        if k in ("times",) or k in ("t0", "t1", "period"):
+            return _quantity(x, "s", errors, sub, k)
+        if k == "phase":
+            return _quantity(x, "1", errors, sub, k)
+        return _quantity(
+            x, unit, errors, sub, k, difference=k in _TF_DIFFERENCE_KEYS, signal_units=signal_units
+        )
+
+    vals: dict[str, Any] = {}
+    for k in required + optional:
+        if k not in v:
+            continue
+        x = v[k]
+        if k in ("times", "values"):
+            if not isinstance(x, list) or not x:
+                errors.add(sub, k, f"expected a non-empty array, got {_type_name(x)}")
+                continue
+            vals[k] = [conv(k, xi) for xi in x]
+        else:
+            vals[k] = conv(k, x)
+    if len(errors.items) > n0:
+        return None
+    shown = f"the {kind} time function"
+    try:
+        if kind == "constant":
+            f = tf.Constant(vals["value"])
+            checks = [vals["value"]]
+        elif kind == "step":
+            if vals["t0"] < 0:
+                errors.add(sub, "t0", f"the step time must not be negative (got {vals['t0']:g} s)")
+                return None
+            f = tf.Step(vals["t0"], vals["before"], vals["after"])
+            checks = [vals["before"], vals["after"]]
+        elif kind == "ramp":
+            if not vals["t1"] > vals["t0"]:
+                errors.add(
+                    sub,
+                    "t1",
+                    f"a ramp needs t1 > t0 (got t0 = {vals['t0']:g} s, t1 = {vals['t1']:g} s)",
+                )
+                return None
+            f = tf.Ramp(vals["t0"], vals["t1"], vals["start"], vals["end"])
+            checks = [vals["start"], vals["end"]]
+        elif kind == "table":
+            times, values = vals["times"], vals["values"]
+            if len(times) != len(values):
+                errors.add(
+                    sub,
+                    "values",
+                    f"'times' has {len(times)} entries but 'values' has {len(values)}",
+                )
+                return None
+            if any(b <= a for a, b in zip(times, times[1:], strict=False)):
+                errors.add(sub, "times", "the times of a table must increase strictly")
+                return None
+            f = tf.Table(times, values)
+            checks = list(values)
+        else:  # sine
+            if not vals["period"] > 0:
+                errors.add(sub, "period", f"the period must be positive (got {vals['period']:g} s)")
+                return None
+            args = (vals["mean"], vals["amplitude"], vals["period"])
+            f = tf.Sine(*args, vals.get("phase", 0.0) or 0.0)
+            checks = [vals["mean"] - abs(vals["amplitude"]), vals["mean"] + abs(vals["amplitude"])]
+    except (ValueError, TypeError) as exc:  # the time function's own validation
+        errors.add(table, key, f"invalid {kind} time function: {exc}")
+        return None
+    for x in checks:
+        n1 = len(errors.items)
+        _check_range(x, p, errors, table, key, f"a value of {shown}")
+        if len(errors.items) > n1:
+            break
+    return f
+
+
+def _simulation(data, errors: _Errors) -> SimulationSettings:
+    s = SimulationSettings()
+    table = ("simulation",)
+    sim = data.get("simulation")
+    if sim is None:
+        errors.add((), "simulation", "missing the [simulation] table (at least t_end = ...)")
+        return s
+    if not isinstance(sim, dict):
+        errors.add((), "simulation", f"expected a table, got {_type_name(sim)}")
+        return s
+    for k in sim:
+        if k not in SIMULATION_KEYS:
+            errors.add(
+                table,
+                k,
+                "unknown key; [simulation] has "
+                + ", ".join(SIMULATION_KEYS)
+                + _suggest(k, SIMULATION_KEYS),
+            )
+    if "t_end" not in sim:
+        errors.add(table, "t_end", 'missing: the end time of the simulation, e.g. t_end = "15 min"')
+    for k in ("t_end", "t_start", "output_interval", "max_step"):
+        if k in sim:
+            x = _quantity(sim[k], "s", errors, table, k)
+            if x is not None:
+                if k == "t_start" and x < 0:
+                    errors.add(table, k, f"must not be negative (got {x:g} s)")
+                elif k != "t_start" and x <= 0:
+                    errors.add(table, k, f"must be positive (got {x:g} s)")
+                else:
+                    setattr(s, k, x)
+    if "t_end" in sim and "t_start" in sim and s.t_end <= s.t_start:
+        errors.add(table, "t_end", f"must be after t_start ({s.t_end:g} s <= {s.t_start:g} s)")
+    for k, lo, hi in (("rtol", 0.0, 1.0), ("atol", 0.0, math.inf)):
+        if k in sim:
+            x = _quantity(sim[k], "1", errors, table, k)
+            if x is not None:
+                if not lo < x < hi:
+                    errors.add(table, k, f"must be > 0{' and < 1' if hi == 1 else ''} (got {x:g})")
+                else:
+                    setattr(s, k, x)
+    if "max_order" in sim:
+        x = sim["max_order"]
+        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= 5:
+            errors.add(table, "max_order", f"expected an integer from 1 to 5, got {x!r}")
+        else:
+            s.max_order = x
+    if "start" in sim:
+        x = sim["start"]
+        if not isinstance(x, str) or x.lower() not in ("steady", "given"):
+            errors.add(table, "start", f'expected "steady" or "given", got {x!r}')
+        else:
+            s.start = x.lower()
+    return s
+
+
+_NAME_OK = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
+
+
+def _check_medium(name: str, errors: _Errors, table, key) -> None:
+    """An unknown fluid name is reported here, with its place in the file."""
+    try:
+        from dnasim.media import get_medium
+    except ImportError:  # pragma: no cover - media layer missing
+        return
+    try:
+        get_medium(name)
+    except PlantError as exc:
+        errors.add(table, key, str(exc))
+    except Exception as exc:  # the media layer's own failure: still the user's input
+        errors.add(table, key, f"unknown fluid {name!r}: {exc}")
+
+
+def _signal_units(comps: dict, registry) -> dict[str, list[str]]:
+    """For each component, the units of the signal outputs linked into it (from the raw
+    tables, before validation; anything malformed is skipped here and reported later)."""
+    out: dict[str, list[str]] = {}
+    for name, table in comps.items():
+        if not isinstance(table, dict) or not isinstance(table.get("inputs"), dict):
+            continue
+        for src in table["inputs"].values():
+            if not isinstance(src, str) or src.count(".") != 1:
+                continue
+            cname, oname = src.split(".")
+            other = comps.get(cname)
+            if not isinstance(other, dict) or not isinstance(other.get("type"), str):
+                continue
+            cls = registry.get(other["type"])
+            for port in getattr(cls, "SIGNAL_OUTPUTS", ()) or ():
+                if getattr(port, "name", None) == oname and getattr(port, "unit", None):
+                    try:
+                        parse_unit(port.unit)
+                    except UnitError:
+                        continue
+                    out.setdefault(name, []).append(port.unit)
+    return out
+
+
+def _component(
+    name, table_data, registry, errors: _Errors, signal_units=()
+) -> ComponentSpec | None:
+    table = ("components", name)
+    if not _NAME_OK.match(name):
+        errors.add(
+            table,
+            None,
+            f"invalid component name {name!r}: use letters, digits, '_' and '-', "
+            "starting with a letter (a '.' would clash with 'component.port')",
+        )
+        return None
+    if not isinstance(table_data, dict):
+        errors.add(
+            ("components",),
+            name,
+            f"expected a table [components.{name}], got {_type_name(table_data)}",
+        )
+        return None
+    if "type" not in table_data:
+        errors.add(
+            table,
+            "type",
+            'missing: every component needs type = "..."; known types: '
+            + ", ".join(sorted(registry)),
+        )
+        return None
+    tname = table_data["type"]
+    if not isinstance(tname, str):
+        errors.add(table, "type", f"expected the name of a component type, got {_type_name(tname)}")
+        return None
+    cls = registry.get(tname)
+    if cls is None:
+        errors.add(
+            table,
+            "type",
+            f"unknown component type {tname!r}{_suggest(tname, registry)} "
+            f"(known: {', '.join(sorted(registry))}; see `dnasim components`)",
+        )
+        return None
+    spec = ComponentSpec(name=name, type=tname, cls=cls)
+    desc = table_data.get("description", "")
+    if not isinstance(desc, str):
+        errors.add(table, "description", f"expected a string, got {_type_name(desc)}")
+    else:
+        spec.description = desc
+    params = {p.name: p for p in params_of(cls)}
+    fports = fluid_ports(cls)
+    sin = signal_inputs(cls)
+    sout = signal_outputs(cls)
+    n0 = len(errors.items)
+    for key, value in table_data.items():
+        if key in RESERVED_KEYS:
+            continue
+        p = params.get(key)
+        if p is None:
+            hint = _suggest(key, list(params) + list(RESERVED_KEYS))
+            if key in fports:
+                hint = f"; '{key}' is a fluid port: write ports = {{ {key} = \"node\" }}"
+            elif key in sin:
+                hint = (
+                    f"; '{key}' is a signal input: "
+                    f'write inputs = {{ {key} = "component.output" }}'
+                )
+            errors.add(
+                table,
+                key,
+                f"unknown parameter of {tname}{hint} (parameters: {', '.join(params) or 'none'})",
+            )
+            continue
+        spec.params[key] = _param_value(value, p, errors, table, key, signal_units)
+        if key == "medium" and isinstance(spec.params[key], str):
+            _check_medium(spec.params[key], errors, table, key)
+    for pname, p in params.items():
+        if pname not in table_data and _is_required(p):
+            unit = _param_unit(p)
+            doc = getattr(p, "doc", "")
+            errors.add(
+                table,
+                pname,
+                f"missing required parameter of {tname}"
+                + (f" ({doc})" if doc else "")
+                + (f', e.g. {pname} = "{_example(unit)}"' if _param_kind(p) == "number" else ""),
+            )
+    if len(errors.items) == n0:
+        # the parameters are valid: build the component now (cheap, no numerics) so
+        # that its own checks run and ports that depend on parameters are known
+        try:
+            spec.instance = cls(name, **spec.params)
+        except PlantError as exc:
+            errors.add(table, None, _strip_component_prefix(str(exc), name))
+        except (TypeError, ValueError, KeyError, ArithmeticError) as exc:
+            errors.add(table, None, f"{tname} refused its parameters: {exc}")
+        else:
+            inst = spec.instance
+            fports = _names(inst.fluid_ports()) if hasattr(inst, "fluid_ports") else fports
+            sin = _names(inst.signal_inputs()) if hasattr(inst, "signal_inputs") else sin
+            sout = _names(inst.signal_outputs()) if hasattr(inst, "signal_outputs") else sout
+    spec.fluid_ports, spec.signal_inputs, spec.signal_outputs = fports, sin, sout
+    # fluid ports
+    ports = table_data.get("ports", {})
+    if not isinstance(ports, dict):
+        errors.add(
+            table,
+            "ports",
+            f"expected a table like ports = {{ {_port_example(fports)} }}, got {_type_name(ports)}",
+        )
+        ports = {}
+    for port, node in ports.items():
+        sub = table + ("ports",)
+        if port not in fports:
+            if port in sin or port in sout:
+                errors.add(
+                    sub,
+                    port,
+                    f"'{port}' is a signal port of {tname}, not a fluid port: a signal cannot be "
+                    f'wired to a node; write inputs = {{ {port} = "component.output" }}'
+                    if port in sin
+                    else f"'{port}' is a signal output of {tname}, not a fluid port; link it from "
+                    "the receiving component's inputs",
+                )
+            else:
+                errors.add(
+                    sub,
+                    port,
+                    f"{tname} has no fluid port '{port}'{_suggest(port, fports)} "
+                    f"(fluid ports: {', '.join(fports) or 'none'})",
+                )
+            continue
+        if not isinstance(node, str) or not node:
+            errors.add(sub, port, f"expected a node name (a string), got {_type_name(node)}")
+            continue
+        if not _NAME_OK.match(node):
+            errors.add(sub, port, f"invalid node name {node!r}: use letters, digits, '_' and '-'")
+            continue
+        spec.ports[port] = node
+    for port in fports:
+        if port not in ports:
+            errors.add(
+                table,
+                "ports",
+                f"unconnected port: the fluid port '{port}' of {tname} is not connected; "
+                f'add {port} = "<node>" to ports',
+            )
+    # signal inputs
+    inputs = table_data.get("inputs", {})
+    if not isinstance(inputs, dict):
+        errors.add(
+            table,
+            "inputs",
+            f'expected a table like inputs = {{ {sin[0] if sin else "u"} = "sensor.T" }}, '
+            f"got {_type_name(inputs)}",
+        )
+        inputs = {}
+    for inp, src in inputs.items():
+        sub = table + ("inputs",)
+        if inp not in sin:
+            if inp in fports:
+                errors.add(
+                    sub,
+                    inp,
+                    f"'{inp}' is a fluid port of {tname}: a signal cannot be wired to a fluid "
+                    "port; "
+                    f'fluid ports are connected to nodes in ports = {{ {inp} = "node" }}',
+                )
+            else:
+                errors.add(
+                    sub,
+                    inp,
+                    f"{tname} has no signal input '{inp}'{_suggest(inp, sin)} "
+                    f"(signal inputs: {', '.join(sin) or 'none'})",
+                )
+            continue
+        if not isinstance(src, str) or src.count(".") != 1:
+            errors.add(
+                sub,
+                inp,
+                f'expected "component.output" (e.g. "sensor.T"), got {src!r}',
+            )
+            continue
+        spec.inputs[inp] = src
+    for inp in sin:
+        if inp not in inputs:
+            errors.add(
+                table,
+                "inputs",
+                f"unconnected port: the signal input '{inp}' of {tname} is not linked; "
+                f'add {inp} = "<component>.<output>" to inputs',
+            )
+    return spec
+
+
+def _param_value(value, p, errors, table, key, signal_units=()):
+    kind = _param_kind(p)
+    unit = _param_unit(p)
+    if kind == "string":
+        if not isinstance(value, str):
+            errors.add(table, key, f"expected a string, got {_type_name(value)} ({value!r})")
+            return None
+        choices = getattr(p, "choices", None)
+        if choices and value not in choices:
+            errors.add(
+                table,
+                key,
+                f"expected one of {', '.join(map(str, choices))}, "
+                f"got {value!r}{_suggest(value, choices)}",
+            )
+        return value
+    if kind == "bool":
+        if not isinstance(value, bool):
+            errors.add(table, key, f"expected true or false, got {_type_name(value)} ({value!r})")
+            return None
+        return value
+    if kind not in ("number", "float", "int", "integer"):
+        return value  # unknown kind: hand over as it is, the component validates
+    if isinstance(value, dict):
+        if not getattr(p, "time_function", False):
+            errors.add(
+                table,
+                key,
+                f"{p.name} is a constant parameter; a time function ({{ type = ... }}) is "
+                "allowed only for boundary values and setpoints",
+            )
+            return None
+        return _time_function(value, p, errors, table, key, signal_units)
+    x = _quantity(value, unit, errors, table, key, signal_units=signal_units)
+    if x is None:
+        return None
+    if kind in ("int", "integer"):
+        if x != int(x):
+            errors.add(table, key, f"expected an integer, got {value!r}")
+            return None
+        x = int(x)
+    _check_range(x, p, errors, table, key, repr(value) if isinstance(value, str) else f"{x:g}")
+    return x
+
+
+def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
+    by_name = {c.name: c for c in specs}
+    node_members: dict[str, list[tuple[str, str]]] = {}
+    for c in specs:
+        for port, node in c.ports.items():
+            node_members.setdefault(node, []).append((c.name, port))
+    for node, members in node_members.items():
+        if node in by_name:
+            c, port = members[0]
+            errors.add(
+                ("components", c, "ports"),
+                port,
+                f"name used twice: '{node}' is both a component and a node; "
+                "give the node another name",
+            )
+        if len(members) == 1:
+            c, port = members[0]
+            errors.add(
+                ("components", c, "ports"),
+                port,
+                f"unconnected port: node '{node}' has only {c}.{port}; every node joins at least "
+                "two ports (end a line with a boundary component)",
+            )
+    for c in specs:
+        for inp, src in c.inputs.items():
+            sub = ("components", c.name, "inputs")
+            comp, out = src.split(".")
+            other = by_name.get(comp)
+            if other is None:
+                errors.add(sub, inp, f"no component named '{comp}'{_suggest(comp, by_name)}")
+                continue
+            outs = other.signal_outputs
+            if out not in outs:
+                if out in other.fluid_ports:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"'{src}' is a fluid port of {other.type}: a signal input must be linked "
+                        f"to a signal output (outputs of {comp}: {', '.join(outs) or 'none'})",
+                    )
+                else:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"{other.type} '{comp}' has no signal output '{out}'{_suggest(out, outs)} "
+                        f"(outputs: {', '.join(outs) or 'none'})",
+                    )
+
+
+def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> PlantSpec:
+    """Validate decoded TOML; every problem becomes part of one ``PlantError``."""
+    errors = _Errors(str(path), _LineIndex(text) if text is not None else None)
+    if not isinstance(data, dict):
+        errors.add((), None, "a plant file is a TOML document of tables")
+        errors.raise_if_any()
+    for k in data:
+        if k not in _TOP_LEVEL:
+            errors.add(
+                (),
+                k,
+                f"unknown top-level key or table; expected [plant], [simulation] and "
+                f"[components.<name>]{_suggest(k, _TOP_LEVEL)}",
+            )
+    name = Path(str(path)).stem
+    description = ""
+    medium = None
+    meta = data.get("plant", {})
+    if not isinstance(meta, dict):
+        errors.add((), "plant", f"expected a table [plant], got {_type_name(meta)}")
+        meta = {}
+    for k, v in meta.items():
+        if k == "name":
+            name = _as_text(v, errors, ("plant",), k) or name
+        elif k == "description":
+            description = _as_text(v, errors, ("plant",), k) or ""
+        elif k == "medium":
+            medium = _as_text(v, errors, ("plant",), k)
+            if medium is not None:
+                _check_medium(medium, errors, ("plant",), k)
+        else:
+            errors.add(
+                ("plant",),
+                k,
+                "unknown key; [plant] has name, description and medium"
+                + _suggest(k, ("name", "description", "medium")),
+            )
+    sim = _simulation(data, errors)
+    comps = data.get("components")
+    specs: list[ComponentSpec] = []
+    if comps is None:
+        errors.add(
+            (), "components", 'no components: add tables [components.<name>] with type = "..."'
+        )
+    elif not isinstance(comps, dict):
+        errors.add(
+            (), "components", f"expected tables [components.<name>], got {_type_name(comps)}"
+        )
+    else:
+        if not comps:
+            errors.add(
+                (), "components", 'no components: add tables [components.<name>] with type = "..."'
+            )
+        registry = _registry()
+        sig_units = _signal_units(comps, registry)
+        for cname, ctable in comps.items():
+            spec = _component(cname, ctable, registry, errors, tuple(sig_units.get(cname, ())))
+            if spec is not None:
+                specs.append(spec)
+        _network(specs, errors)
+    errors.raise_if_any()
+    return PlantSpec(
+        path=str(path),
+        name=name,
+        description=description,
+        simulation=sim,
+        components=specs,
+        medium=medium,
+    )
+
+
+# --------------------------------------------------------------------------- building
+
+
+def build_plant(spec: PlantSpec):
+    """Turn a validated spec into a ``Plant`` through the plant model's Python API."""
+    from dnasim.network import Plant
+
+    errors = _Errors(spec.path, None)
+    plant = Plant(spec.name, medium=spec.medium) if spec.medium else Plant(spec.name)
+    for c in spec.components:
+        try:
+            comp = c.instance if c.instance is not None else c.cls(c.name, **c.params)
+        except PlantError as exc:
+            errors.add(("components", c.name), None, str(exc))
+            continue
+        except (TypeError, ValueError) as exc:
+            errors.add(("components", c.name), None, f"{c.type} refused its parameters: {exc}")
+            continue
+        plant.add(comp)
+    errors.raise_if_any()
+    for c in spec.components:
+        for port, node in c.ports.items():
+            try:
+                plant.connect(f"{c.name}.{port}", node)
+            except PlantError as exc:
+                errors.add(("components", c.name, "ports"), port, str(exc))
+    for c in spec.components:
+        for inp, src in c.inputs.items():
+            try:
+                plant.link(src, f"{c.name}.{inp}")
+            except PlantError as exc:
+                errors.add(("components", c.name, "inputs"), inp, str(exc))
+    errors.raise_if_any()
+    try:
+        plant.simulation = spec.simulation
+    except AttributeError:  # a Plant with __slots__: settings stay in LoadedPlant
+        pass
+    return plant
+
+
+def _port_example(ports) -> str:
+    return ", ".join(f'{q} = "n{i}"' for i, q in enumerate(ports, 1)) or 'inlet = "n1"'
+
+
+def _strip_component_prefix(msg: str, name: str) -> str:
+    """The component's own message names it; the table already does."""
+    return re.sub(rf"^component '{re.escape(name)}'( \(\w+\))?: ", "", msg)
+
+
+def load(path: str | Path) -> LoadedPlant:
+    """Read, validate and build: the plant, its ``[simulation]`` settings and its spec."""
+    data, text = read_plant_file(path)
+    spec = parse_plant(data, str(path), text)
+    plant = build_plant(spec)
+    return LoadedPlant(plant=plant, simulation=spec.simulation, spec=spec, path=str(path))
+
+
+def loads(text: str, path: str = "<string>") -> LoadedPlant:
+    """Like :func:`load` for TOML text."""
+    data = _decode(text, path)
+    spec = parse_plant(data, path, text)
+    return LoadedPlant(plant=build_plant(spec), simulation=spec.simulation, spec=spec, path=path)
+
+
+def load_plant(path: str | Path):
+    """The ``Plant`` described by a TOML plant file, the same object the Python API builds.
+
+    The file's ``[simulation]`` settings are attached as ``plant.simulation``
+    (a :class:`SimulationSettings`); ``simulate_plant(plant)`` runs with them::
+
+        plant = dnasim.load_plant("plants/attemperator.toml")
+        res = plant.simulate(plant.simulation.t_end, rtol=1e-6, atol=1e-8)
+        df = res.to_dataframe()
+    """
+    return load(path).plant
+
+
+def simulate_plant(plant, settings: SimulationSettings | None = None, **overrides):
+    """``plant.simulate`` with a file's settings; keyword arguments override them.
+
+    Only keywords ``plant.simulate`` accepts are passed.
+    """
+    s = settings or getattr(plant, "simulation", None) or SimulationSettings()
+    kwargs = {
+        "rtol": s.rtol,
+        "atol": s.atol,
+        "max_order": s.max_order,
+        "start": s.start,
+        "t_eval": s.t_eval(),
+    }
+    if s.max_step is not None:
+        kwargs["max_step"] = s.max_step
+    if s.t_start:
+        kwargs["t0"] = s.t_start
+    t_end = overrides.pop("t_end", s.t_end)
+    kwargs.update(overrides)
+    try:
+        sig = inspect.signature(plant.simulate)
+        accepts_any = any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values())
+        if not accepts_any:
+            kwargs = {k: v for k, v in kwargs.items() if k in sig.parameters}
+    except (TypeError, ValueError):
+        pass
+    return plant.simulate(t_end, **kwargs)

@@ -1,0 +1,400 @@
+"""What ``dnasim run`` does between loading a plant and printing its summary.
+
+``run_plant`` streams every output point to ``results.csv`` while the solver runs
+(through the plant's ``callback``), then writes ``events.csv`` and ``steps.csv``.
+A solver failure (``DAEError`` with ``.result``) or an interrupt leaves the CSV
+valid up to the time reached, and the outcome says where and why the run stopped.
+Usable from Python too::
+
+    from dnasim.plantfile import load
+    from dnasim.runner import run_plant
+    outcome = run_plant(load("plants/attemperator.toml"), "out/")
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from dnasim.output import (
+    StreamingCSV,
+    column_header,
+    plot_steps,
+    plot_variables,
+    read_results_csv,
+    select_variables,
+    write_events_csv,
+    write_steps_csv,
+)
+
+__all__ = [
+    "RunOutcome",
+    "run_plant",
+    "write_plots",
+    "describe_report",
+    "format_component",
+    "default_plot_variables",
+    "plant_output_layout",
+]
+
+
+@dataclass
+class RunOutcome:
+    """How a run ended, and what it wrote."""
+
+    success: bool
+    status: str  # "finished", "failed", "interrupted"
+    message: str
+    t_end: float
+    t_reached: float | None
+    rows: int
+    out_dir: Path
+    files: list[Path] = field(default_factory=list)
+    stats: dict = field(default_factory=dict)
+    n_events: int = 0
+    n_steps: int = 0
+    wall_time: float = 0.0
+    result: Any = None
+    event_log: list = field(default_factory=list)
+    step_history: Any = None
+
+    def failure_message(self) -> str:
+        where = (
+            "before the first output point"
+            if self.t_reached is None
+            else f"at t = {self.t_reached:.6g} s"
+        )
+        verb = "was interrupted" if self.status == "interrupted" else "failed"
+        csv_note = (
+            f"; {self.out_dir / 'results.csv'} holds the {self.rows} rows up to that time"
+            if self.rows
+            else ""
+        )
+        return (
+            f"the simulation {verb} {where} (end time {self.t_end:.6g} s): {self.message}{csv_note}"
+        )
+
+    def summary(self) -> str:
+        s = self.stats or {}
+        parts = [
+            f"{self.status}: t = {self.t_reached:.6g} s of {self.t_end:.6g} s"
+            if self.t_reached is not None
+            else f"{self.status}: no output",
+            f"steps {s.get('steps', self.n_steps)}",
+        ]
+        rej = (s.get("rejected_error") or 0) + (s.get("rejected_newton") or 0)
+        if s:
+            parts.append(f"rejected {rej}")
+        parts.append(f"events {self.n_events}")
+        if "residual_evals" in s:
+            parts.append(f"residual evaluations {s['residual_evals']}")
+        if "jac_evals" in s:
+            parts.append(f"Jacobians {s['jac_evals']}")
+        parts.append(f"wall time {self.wall_time:.2f} s")
+        return ", ".join(parts) + f"\nresults in {self.out_dir}"
+
+
+# --------------------------------------------------------------------------- plant adapters
+
+
+def plant_output_layout(plant) -> tuple[list[str], dict[str, str], Any]:
+    """Names, units and a row function ``row(t, y, yp) -> values`` for streaming,
+    from the plant's ``output_names()``, ``output_units()`` and ``output_row()``."""
+    names = list(plant.output_names())
+    units = dict(plant.output_units())
+    return names, units, plant.output_row
+
+
+# --------------------------------------------------------------------------- run
+
+
+class _Progress:
+    def __init__(self, t0: float, t1: float, enabled: bool):
+        self.enabled = enabled
+        self.t0, self.t1 = t0, t1
+        self.bar = None
+        self.done = 0
+        if enabled:
+            import click
+
+            self.bar = click.progressbar(
+                length=1000,
+                label="simulating",
+                show_eta=True,
+                show_percent=True,
+                width=30,
+                item_show_func=lambda t: None if t is None else f"t = {t:.6g} s",
+            )
+            self.bar.__enter__()
+
+    def update(self, t: float) -> None:
+        if self.bar is None:
+            return
+        frac = (t - self.t0) / (self.t1 - self.t0) if self.t1 > self.t0 else 1.0
+        n = int(max(0.0, min(1.0, frac)) * 1000)
+        if n > self.done:
+            self.bar.update(n - self.done, current_item=t)
+            self.done = n
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.__exit__(None, None, None)
+            self.bar = None
+
+
+def run_plant(
+    loaded,
+    out_dir,
+    *,
+    progress: bool = False,
+    interrupt_types: tuple = (KeyboardInterrupt,),
+    flush_rows: int = 200,
+    flush_seconds: float = 1.0,
+) -> RunOutcome:
+    """Simulate ``loaded`` (a ``dnasim.plantfile.LoadedPlant``), streaming into ``out_dir``.
+
+    Returns a :class:`RunOutcome`; failures of the simulation (``DAEError``) and
+    interrupts are reported in it, never raised. ``PlantError`` (a plant that
+    cannot be assembled) is raised.
+    """
+    from dnasim.errors import DAEError
+    from dnasim.plantfile import simulate_plant
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    sim = loaded.simulation
+    plant = loaded.plant
+    t_start = time.perf_counter()
+
+    state: dict[str, Any] = {"writer": None, "row": None, "times": [], "last_t": None}
+    bar = _Progress(sim.t_start, sim.t_end, progress)
+    results_path = out / "results.csv"
+    # the header needs the plant's layout, which exists only once it is assembled:
+    # open the writer at the first callback
+    for stale in ("events.csv", "steps.csv"):
+        try:
+            (out / stale).unlink()
+        except FileNotFoundError:
+            pass
+
+    def callback(t, y, yp):
+        w = state["writer"]
+        if w is None:
+            names, units, row = plant_output_layout(plant)
+            header = [column_header("time", "s")] + [column_header(n, units.get(n)) for n in names]
+            w = StreamingCSV(
+                results_path, header, flush_rows=flush_rows, flush_seconds=flush_seconds
+            )
+            state["writer"], state["row"] = w, row
+            state["names"], state["units"] = names, units
+        values = state["row"](t, y, yp)
+        w.write_row([t, *values])
+        state["times"].append(float(t))
+        bar.update(float(t))
+
+    status, message, result = "finished", "", None
+    try:
+        try:
+            result = simulate_plant(plant, sim, callback=callback)
+            success = bool(getattr(result, "success", True))
+            if not success:
+                status = "failed"
+                message = str(getattr(result, "message", "the solver stopped"))
+            else:
+                message = str(getattr(result, "message", "") or "")
+        except DAEError as exc:
+            status, success = "failed", False
+            message = str(exc)
+            result = getattr(exc, "result", None)
+        except interrupt_types:
+            status, success = "interrupted", False
+            message = "interrupted by the user (Ctrl-C or SIGTERM)"
+    finally:
+        bar.close()
+        if state["writer"] is not None:
+            state["writer"].close()
+            state["last_t"] = state["writer"].last_time  # the last row on disk
+    wall = time.perf_counter() - t_start
+
+    event_log = list(getattr(result, "event_log", None) or [])
+    step_history = getattr(result, "step_history", None)
+    if (step_history is None or len(step_history) == 0) and status != "finished":
+        # interrupted: the solver handed nothing over; without an output interval the
+        # rows are the accepted steps, so their spacing is the step size (order unknown)
+        step_history = _steps_from_times(state["times"]) if sim.output_interval is None else []
+    files = []
+    write_events_csv(out / "events.csv", event_log)
+    files.append(out / "events.csv")
+    n_steps = write_steps_csv(out / "steps.csv", step_history if step_history is not None else [])
+    files.append(out / "steps.csv")
+    if state["writer"] is not None:
+        files.insert(0, results_path)
+    stats = dict(getattr(result, "stats", None) or {})
+    return RunOutcome(
+        success=success,
+        status=status,
+        message=message,
+        t_end=sim.t_end,
+        t_reached=state["last_t"],
+        rows=state["writer"].rows_written if state["writer"] is not None else 0,
+        out_dir=out,
+        files=files,
+        stats=stats,
+        n_events=len(event_log),
+        n_steps=n_steps,
+        wall_time=wall,
+        result=result,
+        event_log=event_log,
+        step_history=step_history,
+    )
+
+
+def _steps_from_times(times):
+    """Step sizes from the output times when the solver could not hand its history over
+    (an interrupt); the order is unknown there (NaN)."""
+    rows = []
+    for a, b in zip(times, times[1:], strict=False):
+        if b > a:
+            rows.append((b, b - a, math.nan))
+    return rows
+
+
+# --------------------------------------------------------------------------- plots
+
+
+_PREFERRED = ("T_out", "T", "T_outlet", "output", "m", "p_out")
+
+
+def default_plot_variables(names, limit: int = 8) -> list[str]:
+    """Outlet temperatures and controller outputs first, else the first few variables."""
+    chosen = [n for n in names if n.rsplit(".", 1)[-1] in ("T_out", "T_outlet", "y", "output")]
+    if not chosen:
+        chosen = [n for n in names if n.rsplit(".", 1)[-1].startswith("T")]
+    if not chosen:
+        chosen = list(names)
+    return chosen[:limit]
+
+
+def write_plots(outcome: RunOutcome, out_dir, patterns) -> list[Path]:
+    out = Path(out_dir)
+    names, units, data = read_results_csv(out / "results.csv")
+    variables = names[1:]
+    chosen = (
+        select_variables(variables, patterns) if patterns else default_plot_variables(variables)
+    )
+    if patterns and not chosen:
+        raise ValueError(f"no variable matches {' '.join(patterns)}")
+    ev_times = [e.get("t") for e in outcome.event_log if e.get("t") is not None]
+    files = [
+        plot_variables(
+            data["time"], data, chosen, units, out / "variables.png", event_times=ev_times
+        )
+    ]
+    if outcome.step_history is not None and len(outcome.step_history):
+        files.append(plot_steps(outcome.step_history, out / "steps.png", event_times=ev_times))
+    return files
+
+
+# --------------------------------------------------------------------------- check / components
+
+
+def describe_report(report) -> tuple[str, bool]:
+    """Text of a ``StructureReport`` (equations, unknowns, states, matching, problems)
+    and whether it is free of errors."""
+    if report is None:
+        return "no structural report", True
+    ok = bool(getattr(report, "ok", not getattr(report, "errors", None)))
+    n_eq = getattr(report, "n_equations", None)
+    if n_eq is None:
+        return str(report), ok
+    n_unk = report.n_unknowns
+    n_diff = report.n_differential
+    lines = [
+        f"equations:  {n_eq}",
+        f"unknowns:   {n_unk} ({n_diff} differential states, {n_unk - n_diff} algebraic)",
+    ]
+    ue = list(getattr(report, "unmatched_equations", []) or [])
+    uv = list(getattr(report, "unmatched_variables", []) or [])
+    if not ue and not uv and n_eq == n_unk:
+        lines.append(f"matching:   complete, every equation matched to one unknown ({n_eq})")
+    else:
+        lines.append(
+            f"matching:   incomplete, {len(ue)} equations and {len(uv)} unknowns unmatched"
+        )
+        if ue:
+            lines.append("  unmatched equations: " + ", ".join(map(str, ue[:20])))
+        if uv:
+            lines.append("  unmatched unknowns:  " + ", ".join(map(str, uv[:20])))
+    for e in getattr(report, "errors", []) or []:
+        lines.append(f"error: {e}")
+    for w in getattr(report, "warnings", []) or []:
+        lines.append(f"warning: {w}")
+    return "\n".join(lines), ok
+
+
+def format_component(info: dict) -> str:
+    """The text of ``dnasim components NAME``: description and equations (from the
+    docstring), ports, parameters with units, defaults and ranges, a TOML skeleton."""
+    lines = [info["type"], ""]
+    if info["doc"]:
+        lines += [("  " + line).rstrip() for line in info["doc"].splitlines()]
+    if info["equations"]:
+        lines += ["", "  equations:"] + [f"    {e}" for e in info["equations"]]
+
+    def ports(title, items, show_unit):
+        if not items:
+            return []
+        w = max(len(p["name"]) for p in items)
+        out = ["", f"  {title}:"]
+        for p in items:
+            extra = f"[{p['unit']}]" if show_unit and p["unit"] else p["role"]
+            out.append(f"    {p['name']:<{w}}  {extra:<12} {p['doc']}".rstrip())
+        return out
+
+    lines += ports('fluid ports (ports = { port = "node" })', info.get("fluid_port_info"), False)
+    lines += ports(
+        'signal inputs (inputs = { input = "component.output" })',
+        info.get("signal_input_info"),
+        True,
+    )
+    lines += ports("signal outputs", info.get("signal_output_info"), True)
+    if info["params"]:
+        lines += ["", "  parameters:"]
+        w = max(len(p["name"]) for p in info["params"])
+        for p in info["params"]:
+            if p["required"]:
+                d = "required"
+            elif p["default"] is None:
+                d = "optional"
+            else:
+                d = f"default {p['default']!r}"
+            rng = ""
+            if p["min"] is not None or p["max"] is not None:
+                lo = "-inf" if p["min"] is None else f"{p['min']:g}"
+                hi = "inf" if p["max"] is None else f"{p['max']:g}"
+                rng = f", range [{lo}, {hi}]"
+            tf = ", may be a time function" if p["time_function"] else ""
+            ch = f", one of {', '.join(map(repr, p['choices']))}" if p.get("choices") else ""
+            unit = f"[{p['unit']}]" if p["kind"] in ("number", "int") else f"({p['kind']})"
+            lines.append(f"    {p['name']:<{w}}  {unit:<10} {d}{rng}{ch}{tf}")
+            if p["doc"]:
+                lines.append(f"    {'':<{w}}  {p['doc']}")
+    # a skeleton to paste into a plant file
+    lines += ["", "  in a plant file:", "    [components.<name>]", f'    type = "{info["type"]}"']
+    for p in info["params"]:
+        if p["required"]:
+            lines.append(f"    {p['name']} = ...  # [{p['unit']}]")
+    if info["fluid_ports"]:
+        lines.append(
+            "    ports = { " + ", ".join(f'{q} = "<node>"' for q in info["fluid_ports"]) + " }"
+        )
+    if info["signal_inputs"]:
+        lines.append(
+            "    inputs = { "
+            + ", ".join(f'{q} = "<component>.<output>"' for q in info["signal_inputs"])
+            + " }"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,255 @@
+"""Structural analysis of a plant, run by ``Plant.check()`` before any numerics.
+
+Checks, in order (later ones need the earlier ones to pass):
+
+1. names: duplicate component names, a node named like a component;
+2. wiring: dangling fluid ports and signal inputs, nodes with one port only,
+   nodes whose enthalpy is fixed by no outlet or by several outlets;
+3. counting: per component, equations = own variables + outlet ports (each
+   outlet fixes its node's enthalpy); for the plant, equations = unknowns;
+4. structural regularity: a maximum matching between equations and variables
+   (networkx bipartite matching, a variable and its derivative count as one);
+   unmatched equations and variables are named by component;
+5. index 1: a maximum matching between the equations and {y'_i of the
+   differential variables, y_j of the algebraic ones}. If it is not perfect the
+   DAE has index > 1. The common cause, two storage volumes (or a storage volume
+   and a fixed pressure) joined with no flow resistance between them, is named in
+   plain words from the ports' pressure roles;
+6. connectivity: disconnected sub-networks are reported as a warning.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+
+import networkx as nx
+from networkx.algorithms import bipartite
+
+from dnasim.errors import PlantError
+
+
+def analyse(plant, report) -> None:
+    _check_names(plant, report)
+    _check_wiring(plant, report)
+    if report.errors:
+        return
+    from dnasim.assembly import AssembledDAE
+
+    try:
+        dae = AssembledDAE(plant)
+    except PlantError as err:
+        report.errors.append(str(err))
+        return
+    report.n_equations = dae.n_equations
+    report.n_unknowns = dae.n
+    report.n_differential = int(dae.differential.sum())
+    _check_counts(plant, dae, report)
+    _check_matching(plant, dae, report)
+    _check_connectivity(plant, report)
+
+
+def _check_names(plant, report):
+    for name in sorted(set(plant._duplicates)):
+        report.errors.append(
+            f"duplicate component name '{name}': each component needs its own name"
+        )
+    for node in plant.node_names():
+        if node in plant.components:
+            report.errors.append(
+                f"node '{node}' has the same name as a component; rename one of them"
+            )
+
+
+def _check_wiring(plant, report):
+    for name, comp in plant.components.items():
+        for port in comp.fluid_ports():
+            if (name, port.name) not in plant.connections:
+                report.errors.append(
+                    f"component '{name}' ({type(comp).__name__}): fluid port '{port.name}' is not connected (dangling)"
+                )
+        for sig in comp.signal_inputs():
+            if (name, sig.name) not in plant.links:
+                report.errors.append(
+                    f"component '{name}' ({type(comp).__name__}): signal input '{sig.name}' is not linked (dangling)"
+                )
+    for node in plant.node_names():
+        ports = plant.ports_at(node)
+        labels = ", ".join(f"{c}.{p.name}" for c, p in ports)
+        flowing = [(c, p) for c, p in ports if p.role != "probe"]
+        if len(flowing) < 2:
+            report.errors.append(
+                f"node '{node}' connects only {labels}: a fluid port must meet at least one other port"
+            )
+            continue
+        outlets = [f"{c}.{p.name}" for c, p in ports if p.role == "outlet"]
+        if not outlets:
+            report.errors.append(
+                f"node '{node}' ({labels}): no outlet port feeds it, so nothing sets its enthalpy; "
+                f"a sink boundary takes only p (or m), a source needs h or T"
+            )
+        elif len(outlets) > 1:
+            report.errors.append(
+                f"node '{node}' is fed by several outlets ({', '.join(outlets)}): join streams with a Mixer "
+                f"(a sink boundary must not be given h or T)"
+            )
+
+
+def _check_counts(plant, dae, report):
+    for b in dae.blocks:
+        comp = b.comp
+        n_eq = b.eq_slice.stop - b.eq_slice.start
+        n_own = sum(1 for g in b.gidx if g >= dae.n_node_vars and dae.var_owner[g] == comp.name)
+        n_out = sum(1 for p in comp.fluid_ports() if p.role == "outlet")
+        if n_eq != n_own + n_out:
+            what = "too many" if n_eq > n_own + n_out else "too few"
+            report.errors.append(
+                f"component '{comp.name}' ({type(comp).__name__}) declares {n_eq} equations for {n_own} own "
+                f"variables and {n_out} outlet enthalpies ({n_own + n_out} needed): {what} equations"
+            )
+    if dae.n_equations != dae.n:
+        report.errors.append(
+            f"degrees of freedom: the plant has {dae.n_equations} equations for {dae.n} unknowns"
+        )
+
+
+def _matching(n_eq, n_var, rows):
+    """Maximum matching, then the Dulmage-Mendelsohn over- and under-determined
+    parts: the equations (and their variables) reachable by alternating paths from
+    the unmatched equations, and the variables (and their equations) reachable
+    from the unmatched variables. Unlike the unmatched items of one particular
+    matching these sets do not depend on which maximum matching was found."""
+    g = nx.Graph()
+    eqs = [("e", i) for i in range(n_eq)]
+    g.add_nodes_from(eqs, bipartite=0)
+    g.add_nodes_from((("v", j) for j in range(n_var)), bipartite=1)
+    cols_of = [list(c) for c in rows]
+    rows_of = [[] for _ in range(n_var)]
+    for i, cols in enumerate(rows):
+        for j in cols:
+            g.add_edge(("e", i), ("v", j))
+            rows_of[j].append(i)
+    m = bipartite.hopcroft_karp_matching(g, top_nodes=eqs)
+    un_eq = [i for i in range(n_eq) if ("e", i) not in m]
+    un_var = [j for j in range(n_var) if ("v", j) not in m]
+    over_eq, stack = set(un_eq), list(un_eq)
+    while stack:
+        i = stack.pop()
+        for j in cols_of[i]:
+            k = m.get(("v", j))
+            if k is not None and k[1] not in over_eq:
+                over_eq.add(k[1])
+                stack.append(k[1])
+    under_var, stack = set(un_var), list(un_var)
+    while stack:
+        j = stack.pop()
+        for i in rows_of[j]:
+            k = m.get(("e", i))
+            if k is not None and k[1] not in under_var:
+                under_var.add(k[1])
+                stack.append(k[1])
+    return sorted(over_eq), sorted(under_var)
+
+
+def _check_matching(plant, dae, report):
+    full_rows = [sorted(set(a) | set(b)) for a, b in zip(dae.rows_y, dae.rows_yp)]
+    over, under = _matching(dae.n_equations, dae.n, full_rows)
+    if over or under:
+        report.unmatched_equations = [dae.eq_names[i] for i in over]
+        report.unmatched_variables = [dae.names[j] for j in under]
+        parts = []
+        if over:
+            parts.append(
+                "over-determined equations (more equations than unknowns among them): "
+                + _by_owner(dae.eq_names, dae.eq_owner, over)
+            )
+        if under:
+            parts.append(
+                "under-determined variables (too few equations for them): "
+                + _by_owner(dae.names, dae.var_owner, under)
+            )
+        report.errors.append("structurally singular: " + "; ".join(parts))
+        return
+    diff = dae.differential
+    idx_rows = [
+        sorted({j for j in yp if diff[j]} | {j for j in y if not diff[j]})
+        for y, yp in zip(dae.rows_y, dae.rows_yp)
+    ]
+    over, under = _matching(dae.n_equations, dae.n, idx_rows)
+    plain = _pressure_conflicts(plant)
+    for text in plain:
+        report.errors.append(text)
+    if over or under:
+        report.unmatched_equations = [dae.eq_names[i] for i in over]
+        labels = [f"d({nm})/dt" if diff[j] else nm for j, nm in enumerate(dae.names)]
+        report.unmatched_variables = [labels[j] for j in under]
+        report.errors.append(
+            "the DAE has index > 1: its equations cannot be solved for the algebraic variables and the "
+            "derivatives of the differential ones. Over-determined equations: "
+            + _by_owner(dae.eq_names, dae.eq_owner, over)
+            + "; under-determined unknowns: "
+            + _by_owner(labels, dae.var_owner, under)
+        )
+
+
+def _by_owner(names, owners, idx):
+    groups = defaultdict(list)
+    for i in idx:
+        groups[owners[i]].append(names[i])
+    if not groups:
+        return "none"
+    return "; ".join(f"in '{o}': {', '.join(v[:6])}{' ...' if len(v) > 6 else ''}" for o, v in groups.items())
+
+
+def _pressure_conflicts(plant):
+    """Plain-words diagnosis: groups of nodes at one pressure (joined by junctions
+    without resistance) whose pressure is set by more than one storage volume or
+    fixed boundary."""
+    parent = {n: n for n in plant.node_names()}
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for name, comp in plant.components.items():
+        equal = [
+            plant.connections[(name, p.name)] for p in comp.fluid_ports() if p.pressure == "equal"
+        ]
+        for a, b in zip(equal, equal[1:]):
+            parent[find(a)] = find(b)
+    owners = defaultdict(list)
+    for (cname, pname), node in plant.connections.items():
+        port = plant.components[cname].port(pname)
+        if port.pressure in ("storage", "fixed"):
+            owners[find(node)].append((cname, pname, port.pressure, node))
+    out = []
+    for group, who in owners.items():
+        if len(who) < 2:
+            continue
+        nodes = sorted({w[3] for w in who})
+        parts = []
+        for cname, pname, kind, _ in who:
+            what = "a storage volume" if kind == "storage" else "a fixed pressure"
+            parts.append(f"'{cname}' ({what}, port '{pname}')")
+        out.append(
+            f"node{'s' if len(nodes) > 1 else ''} {', '.join(repr(n) for n in nodes)}: "
+            + " and ".join(parts)
+            + " are joined with no flow resistance between them, so the pressure there is set twice "
+            "and the DAE has index 2. Put a flow resistance between them (a Valve, or a Pipe, whose "
+            "inlet has friction)."
+        )
+    return out
+
+
+def _check_connectivity(plant, report):
+    g = plant.graph
+    parts = list(nx.connected_components(g))
+    if len(parts) > 1:
+        desc = []
+        for part in parts:
+            comps = sorted(n for kind, n in part if kind == "component")
+            desc.append("{" + ", ".join(comps) + "}")
+        report.warnings.append(
+            f"the plant has {len(parts)} disconnected sub-networks: " + " ".join(desc)
+        )
