@@ -159,3 +159,41 @@ def test_tstops_are_hit_exactly_and_restart_at_order_one():
     assert res.y[0, -1] == pytest.approx(2.0, abs=1e-8)
     after = np.flatnonzero(res.step_history[:, 0] > 1.0)[0]
     assert res.step_history[after, 2] == 1  # restarted at order 1
+
+
+def _robertson_jacobian(t, y, yp, cj):
+    """dF/dy + cj dF/dy' of Robertson's residual, by hand."""
+    return np.array(
+        [
+            [0.04 + cj, -1e4 * y[2], -1e4 * y[1]],
+            [-0.04, 1e4 * y[2] + 6e7 * y[1] + cj, 1e4 * y[1]],
+            [1.0, 1.0, 1.0],
+        ]
+    )
+
+
+def test_analytic_jacobian_gives_the_same_solution_without_difference_quotients():
+    atol = np.array([1e-8, 1e-14, 1e-8])
+    fd = solve_dae(robertson, (0, 40), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2], rtol=1e-6,
+                   atol=atol)  # fmt: skip
+    exact = solve_dae(robertson, (0, 40), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2], rtol=1e-6,
+                      atol=atol, jac=_robertson_jacobian)  # fmt: skip
+    # Both are solutions to rtol 1e-6; they differ by the small changes in step choice.
+    np.testing.assert_allclose(exact.y[:, -1], fd.y[:, -1], rtol=1e-4, atol=1e-12)
+    # Without finite differences every residual evaluation is a Newton iteration (or the
+    # initial ones).
+    assert exact.stats["residual_evals"] <= exact.stats["newton_iters"] + 10
+
+
+def test_algebraic_components_are_found_when_not_given():
+    atol = np.array([1e-8, 1e-14, 1e-8])
+    given = solve_dae(robertson, (0, 40), ROBERTSON_Y0, algebraic=[2], rtol=1e-6, atol=atol)
+    found = solve_dae(robertson, (0, 40), ROBERTSON_Y0, rtol=1e-6, atol=atol)
+    np.testing.assert_array_equal(found.y[:, -1], given.y[:, -1])
+
+
+def test_excluding_algebraic_components_from_the_error_test():
+    res = solve_dae(akzo, (0, 180), AKZO_Y0, algebraic=[5], rtol=1e-6, atol=1e-6,
+                    exclude_algebraic_from_error=True)  # fmt: skip
+    # The algebraic y6 = ks y1 y4 follows the differential ones: the answer keeps 4 digits.
+    assert significant_digits(res.y[:, -1], AKZO_REF) >= 4.0
