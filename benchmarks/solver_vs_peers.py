@@ -61,15 +61,47 @@ class Counted:
 def problems():
     rob_atol = np.array([1e-2, 1e-8, 1e-2])
     return [
-        dict(name="Robertson", kind="dae", residual=robertson, y0=ROBERTSON_Y0,
-             yp0=ROBERTSON_YP0, t_end=4e10, algebraic=[2], atol_scale=rob_atol, ref=None),
-        dict(name="Akzo Nobel", kind="dae", residual=akzo, y0=AKZO_Y0, yp0=None,
-             t_end=180.0, algebraic=[5], atol_scale=np.ones(6), ref=AKZO_REF),
-        dict(name="Van der Pol mu=1000", kind="ode", rhs=vdp_rhs, y0=VDP_Y0, t_end=3000.0,
-             atol_scale=np.ones(2), ref=None),
-        dict(name="HIRES", kind="ode", rhs=hires_rhs, y0=HIRES_Y0, t_end=HIRES_T_END,
-             atol_scale=np.full(8, 1e-4), ref=HIRES_REF),
-    ]  # fmt: skip
+        dict(
+            name="Robertson",
+            kind="dae",
+            residual=robertson,
+            y0=ROBERTSON_Y0,
+            yp0=ROBERTSON_YP0,
+            t_end=4e10,
+            algebraic=[2],
+            atol_scale=rob_atol,
+            ref=None,
+        ),
+        dict(
+            name="Akzo Nobel",
+            kind="dae",
+            residual=akzo,
+            y0=AKZO_Y0,
+            yp0=None,
+            t_end=180.0,
+            algebraic=[5],
+            atol_scale=np.ones(6),
+            ref=AKZO_REF,
+        ),
+        dict(
+            name="Van der Pol mu=1000",
+            kind="ode",
+            rhs=vdp_rhs,
+            y0=VDP_Y0,
+            t_end=3000.0,
+            atol_scale=np.ones(2),
+            ref=None,
+        ),
+        dict(
+            name="HIRES",
+            kind="ode",
+            rhs=hires_rhs,
+            y0=HIRES_Y0,
+            t_end=HIRES_T_END,
+            atol_scale=np.full(8, 1e-4),
+            ref=HIRES_REF,
+        ),
+    ]
 
 
 def digits(y, ref, atol):
@@ -81,8 +113,15 @@ def digits(y, ref, atol):
 def consistent_start(p):
     """Consistent (y0, yp0) from dnasim's calc_initial, shared by the DAE solvers."""
     residual = p.get("residual") or as_residual(p["rhs"])
-    r = solve_dae(residual, (0, p["t_end"] * 1e-12), p["y0"], p.get("yp0"),
-                  algebraic=p.get("algebraic"), rtol=1e-10, atol=1e-14)  # fmt: skip
+    r = solve_dae(
+        residual,
+        (0, p["t_end"] * 1e-12),
+        p["y0"],
+        p.get("yp0"),
+        algebraic=p.get("algebraic"),
+        rtol=1e-10,
+        atol=1e-14,
+    )
     return r.y[:, 0], r.yp[:, 0]
 
 
@@ -90,11 +129,25 @@ def reference(p, y0, yp0):
     if p["ref"] is not None:
         return p["ref"]
     if p["kind"] == "ode":
-        sol = solve_ivp(p["rhs"], (0, p["t_end"]), p["y0"], method="Radau", rtol=1e-12,
-                        atol=1e-12 * p["atol_scale"])  # fmt: skip
+        sol = solve_ivp(
+            p["rhs"],
+            (0, p["t_end"]),
+            p["y0"],
+            method="Radau",
+            rtol=1e-12,
+            atol=1e-12 * p["atol_scale"],
+        )
         return sol.y[:, -1]
-    run = solve_with_ida(p["residual"], (0, p["t_end"]), y0, yp0, algebraic=p.get("algebraic"),
-                         rtol=1e-12, atol=1e-12 * p["atol_scale"], t_eval=[p["t_end"]])  # fmt: skip
+    run = solve_with_ida(
+        p["residual"],
+        (0, p["t_end"]),
+        y0,
+        yp0,
+        algebraic=p.get("algebraic"),
+        rtol=1e-12,
+        atol=1e-12 * p["atol_scale"],
+        t_eval=[p["t_end"]],
+    )
     return run.y[:, -1]
 
 
@@ -119,27 +172,58 @@ def run_all(rtols, repeat):
 
             def ours():
                 counted = Counted(residual)
-                r = solve_dae(counted, (0, p["t_end"]), y0, yp0, algebraic=p.get("algebraic"),
-                              rtol=rtol, atol=atol, calc_initial=False, dense_output=False)  # fmt: skip
+                r = solve_dae(
+                    counted,
+                    (0, p["t_end"]),
+                    y0,
+                    yp0,
+                    algebraic=p.get("algebraic"),
+                    rtol=rtol,
+                    atol=atol,
+                    calc_initial=False,
+                    dense_output=False,
+                )
                 return r, counted.calls
 
             wall, (r, calls) = best_of(repeat, ours)
             s = r.stats
-            ours_row = dict(problem=p["name"], rtol=rtol, solver="dnasim",
-                            digits=digits(r.y[:, -1], ref, sig_atol), steps=s["steps"],
-                            fevals=calls, jacs=s["jac_evals"], lus=s["lu_decomps"], wall=wall)  # fmt: skip
+            ours_row = dict(
+                problem=p["name"],
+                rtol=rtol,
+                solver="dnasim",
+                digits=digits(r.y[:, -1], ref, sig_atol),
+                steps=s["steps"],
+                fevals=calls,
+                jacs=s["jac_evals"],
+                lus=s["lu_decomps"],
+                wall=wall,
+            )
             rows.append(ours_row)
 
             def ida():
-                return solve_with_ida(residual, (0, p["t_end"]), y0, yp0,
-                                      algebraic=p.get("algebraic"), rtol=rtol, atol=atol)  # fmt: skip
+                return solve_with_ida(
+                    residual,
+                    (0, p["t_end"]),
+                    y0,
+                    yp0,
+                    algebraic=p.get("algebraic"),
+                    rtol=rtol,
+                    atol=atol,
+                )
 
             wall, run = best_of(repeat, ida)
             s = run.stats
-            ida_row = dict(problem=p["name"], rtol=rtol, solver="IDA",
-                           digits=digits(run.y[:, -1], ref, sig_atol), steps=s["steps"],
-                           fevals=s["residual_evals"], jacs=s["jac_evals"], lus=s["lu_decomps"],
-                           wall=wall)  # fmt: skip
+            ida_row = dict(
+                problem=p["name"],
+                rtol=rtol,
+                solver="IDA",
+                digits=digits(run.y[:, -1], ref, sig_atol),
+                steps=s["steps"],
+                fevals=s["residual_evals"],
+                jacs=s["jac_evals"],
+                lus=s["lu_decomps"],
+                wall=wall,
+            )
             rows.append(ida_row)
             ours_row["ratio_time"] = ours_row["wall"] / ida_row["wall"]
             ours_row["ratio_fevals"] = ours_row["fevals"] / ida_row["fevals"]
@@ -148,20 +232,33 @@ def run_all(rtols, repeat):
 
                     def sp(method=method):
                         counted = Counted(p["rhs"])
-                        sol = solve_ivp(counted, (0, p["t_end"]), p["y0"], method=method,
-                                        rtol=rtol, atol=atol)  # fmt: skip
+                        sol = solve_ivp(
+                            counted, (0, p["t_end"]), p["y0"], method=method, rtol=rtol, atol=atol
+                        )
                         return sol, counted.calls
 
                     wall, (sol, calls) = best_of(repeat, sp)
-                    rows.append(dict(problem=p["name"], rtol=rtol, solver=f"scipy {method}",
-                                     digits=digits(sol.y[:, -1], ref, sig_atol), steps=sol.t.size - 1,
-                                     fevals=calls, jacs=sol.njev, lus=sol.nlu, wall=wall))  # fmt: skip
+                    rows.append(
+                        dict(
+                            problem=p["name"],
+                            rtol=rtol,
+                            solver=f"scipy {method}",
+                            digits=digits(sol.y[:, -1], ref, sig_atol),
+                            steps=sol.t.size - 1,
+                            fevals=calls,
+                            jacs=sol.njev,
+                            lus=sol.nlu,
+                            wall=wall,
+                        )
+                    )
     return rows
 
 
 def table(rows) -> str:
-    head = (f"{'problem':<20} {'rtol':>6} {'solver':<12} {'digits':>6} {'steps':>6} "
-            f"{'F evals':>8} {'Jacs':>5} {'LUs':>5} {'wall [s]':>9} {'t/IDA':>6} {'F/IDA':>6}")  # fmt: skip
+    head = (
+        f"{'problem':<20} {'rtol':>6} {'solver':<12} {'digits':>6} {'steps':>6} "
+        f"{'F evals':>8} {'Jacs':>5} {'LUs':>5} {'wall [s]':>9} {'t/IDA':>6} {'F/IDA':>6}"
+    )
     lines = [head, "-" * len(head)]
     for r in rows:
         ratio_t = f"{r['ratio_time']:.2f}" if "ratio_time" in r else ""
@@ -182,8 +279,10 @@ def main():
     rows = run_all(args.rtols, args.repeat)
     import sksundae
 
-    print(f"# solver_vs_peers, {datetime.date.today().isoformat()}, numpy {np.__version__}, "
-          f"scipy {scipy.__version__}, scikit-sundae {sksundae.__version__}")  # fmt: skip
+    print(
+        f"# solver_vs_peers, {datetime.date.today().isoformat()}, numpy {np.__version__}, "
+        f"scipy {scipy.__version__}, scikit-sundae {sksundae.__version__}"
+    )
     print(table(rows))
 
 

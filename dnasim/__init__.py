@@ -1,7 +1,6 @@
 """dnasim: dynamic simulation of energy systems as index-1 DAEs (in the tradition of DTU's DNA)."""
 
 from dnasim.errors import DAEError, DnasimError, PlantError, ResidualDomainError
-from dnasim.solver import DAEResult, solve_dae
 
 __version__ = "0.1.0"
 
@@ -17,7 +16,12 @@ __all__ = [
 
 
 def __getattr__(name):
-    # Imported lazily: the plant-file layer pulls in the component library and CoolProp.
+    # Imported lazily, so `dnasim --help` starts fast: the solver pulls in scipy, the
+    # plant-file layer the component library and CoolProp.
+    if name in ("solve_dae", "DAEResult"):
+        import dnasim.solver
+
+        return getattr(dnasim.solver, name)
     if name == "load_plant":
         from dnasim.plantfile import load_plant
 

@@ -227,7 +227,7 @@ def run(
         from dnasim.errors import PlantError
 
         if isinstance(exc, PlantError):
-            raise InputError(str(exc)) from None
+            raise InputError(f"{plant_file}: {exc}") from None
         raise _internal(exc, EXIT_SIMULATION) from None
     finally:
         if old is not None:

@@ -3,7 +3,8 @@ and benchmarks. Not used by ``dnasim.solve_dae``; needs the optional dependency
 ``scikit-sundae``.
 
 The driver mirrors the plant semantics: it stops exactly at every tstop and
-re-initialises there (consistent y' and algebraic y by IDA's own IDACalcIC), and
+re-initialises there (consistent y' and algebraic y by ``dnasim.initialization``,
+the same damped Newton as the plant's "given" start), and
 it stops at every switch crossing, runs the component's action and
 re-initialises. The returned object has the fields of ``DAEResult``.
 """
@@ -18,6 +19,8 @@ import numpy as np
 def solve_with_ida(dae, t_span, y0, yp0, *, rtol=1e-6, atol=1e-8, max_order=4, max_step=np.inf, h0=None,
                    events=(), tstops=(), t_eval=None, callback=None, linsolver=None, max_num_steps=100000):
     from sksundae.ida import IDA
+
+    from dnasim.initialization import solve_mixed
 
     t0, t_end = map(float, t_span)
     n = dae.n
@@ -94,11 +97,13 @@ def solve_with_ida(dae, t_span, y0, yp0, *, rtol=1e-6, atol=1e-8, max_order=4, m
                     if out is not None:
                         y, yp = out
         if fired or (at_stop and stop < t_end):
+            # consistent values after the jump by dnasim's damped Newton (IDACalcIC
+            # fails on the large jumps a step of a boundary value causes), keeping
+            # the differential variables
             stats["restarts"] += 1
-            solver = make(True)
-            r = solver.init_step(t, y, yp)
-            y = np.array(r.y).reshape(-1)[-n:] if np.ndim(r.y) == 1 else np.array(r.y)[-1]
-            yp = np.array(r.yp).reshape(-1)[-n:] if np.ndim(r.yp) == 1 else np.array(r.yp)[-1]
+            y, yp = solve_mixed(dae, t, y, yp, dae.algebraic.copy(), what="IDA restart")
+            solver = make(False)
+            solver.init_step(t, y, yp)
     stats["residual_evals"] = counter[0]
     return SimpleNamespace(
         t=np.array(ts), y=np.array(ys).T, yp=np.array(yps).T, success=success, status=0 if success else -1,

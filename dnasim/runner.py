@@ -265,17 +265,14 @@ def _steps_from_times(times):
 # --------------------------------------------------------------------------- plots
 
 
-_PREFERRED = ("T_out", "T", "T_outlet", "output", "m", "p_out")
-
-
-def default_plot_variables(names, limit: int = 8) -> list[str]:
-    """Outlet temperatures and controller outputs first, else the first few variables."""
-    chosen = [n for n in names if n.rsplit(".", 1)[-1] in ("T_out", "T_outlet", "y", "output")]
-    if not chosen:
-        chosen = [n for n in names if n.rsplit(".", 1)[-1].startswith("T")]
-    if not chosen:
-        chosen = list(names)
-    return chosen[:limit]
+def default_plot_variables(names, limit: int = 12) -> list[str]:
+    """Without --vars: outlet temperatures, sensor readings and controller outputs,
+    then node temperatures; the first few variables when there are none of these."""
+    leaf = {n: n.rsplit(".", 1)[-1] for n in names}
+    first = [n for n in names if leaf[n] in ("T_out", "T_s", "z")]
+    then = [n for n in names if leaf[n] == "T" and n not in first]
+    chosen = (first + then)[:limit]
+    return chosen or list(names)[: min(limit, 8)]
 
 
 def write_plots(outcome: RunOutcome, out_dir, patterns) -> list[Path]:
@@ -312,6 +309,10 @@ def describe_report(report) -> tuple[str, bool]:
         return str(report), ok
     n_unk = report.n_unknowns
     n_diff = report.n_differential
+    if n_eq == 0 and n_unk == 0 and not ok:  # the analysis stopped before counting
+        lines = [f"error: {e}" for e in getattr(report, "errors", [])]
+        lines += [f"warning: {w}" for w in getattr(report, "warnings", []) or []]
+        return "\n".join(lines), ok
     lines = [
         f"equations:  {n_eq}",
         f"unknowns:   {n_unk} ({n_diff} differential states, {n_unk - n_diff} algebraic)",

@@ -29,11 +29,22 @@ def _fixed_order_error(q, n_steps, lam=-1.0, t_end=1.0):
     stats = SolverStats()
     counted = CountedResidual(residual, 1, stats)
     solver = NordsieckBDF(
-        counted, 0.0, np.array([1.0]), np.array([lam]),
-        rtol=1e-6, atol=np.array([1e-8]), max_order=q, h0=h, max_step=np.inf,
-        error_mask=np.ones(1), matrix=IterationMatrix(counted, 1), stats=stats,
-        t_scale=t_end, fixed_order=True, fixed_step=True,
-    )  # fmt: skip
+        counted,
+        0.0,
+        np.array([1.0]),
+        np.array([lam]),
+        rtol=1e-6,
+        atol=np.array([1e-8]),
+        max_order=q,
+        h0=h,
+        max_step=np.inf,
+        error_mask=np.ones(1),
+        matrix=IterationMatrix(counted, 1),
+        stats=stats,
+        t_scale=t_end,
+        fixed_order=True,
+        fixed_step=True,
+    )
     # Exact Nordsieck start: z_j = h^j y^(j)(0) / j!.
     solver.set_order(q, np.array([[(h * lam) ** j / factorial(j)] for j in range(q + 1)]), h)
     for _ in range(n_steps):
@@ -63,8 +74,9 @@ def test_linear_dae_with_derivative_of_another_variable():
         return np.array([yp[0] + yp[1] + x + 2 * w, yp[1] + 2 * w, z - x - w])
 
     t_eval = np.linspace(0, 5, 11)
-    res = solve_dae(residual, (0, 5), [1.0, 1.0, 0.0], algebraic=[2], rtol=1e-8, atol=1e-10,
-                    t_eval=t_eval)  # fmt: skip
+    res = solve_dae(
+        residual, (0, 5), [1.0, 1.0, 0.0], algebraic=[2], rtol=1e-8, atol=1e-10, t_eval=t_eval
+    )
     exact = np.vstack([np.exp(-t_eval), np.exp(-2 * t_eval), np.exp(-t_eval) + np.exp(-2 * t_eval)])
     # Global error of a 1e-8 local tolerance over a few time constants: 1e-6 is ample.
     np.testing.assert_allclose(res.y, exact, rtol=0, atol=1e-6)
@@ -78,25 +90,50 @@ def test_robertson_against_ida_and_the_conservation_law():
 
     t_out = np.array([0.4, 40.0, 4e2, 4e4, 4e6, 4e8, 4e10])
     atol = np.array([1e-8, 1e-14, 1e-8])
-    ours = solve_dae(robertson, (0, 4e10), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2],
-                     rtol=1e-6, atol=atol, t_eval=t_out)  # fmt: skip
-    ref = solve_with_ida(robertson, (0, 4e10), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2],
-                         rtol=1e-11, atol=atol * 1e-5, t_eval=t_out)  # fmt: skip
+    ours = solve_dae(
+        robertson,
+        (0, 4e10),
+        ROBERTSON_Y0,
+        ROBERTSON_YP0,
+        algebraic=[2],
+        rtol=1e-6,
+        atol=atol,
+        t_eval=t_out,
+    )
+    ref = solve_with_ida(
+        robertson,
+        (0, 4e10),
+        ROBERTSON_Y0,
+        ROBERTSON_YP0,
+        algebraic=[2],
+        rtol=1e-11,
+        atol=atol * 1e-5,
+        t_eval=t_out,
+    )
     assert ours.success and ref.success
     ref_y = ref.y[:, 1:]
     # The tolerances promise a local error below rtol |y| + atol per step; over some 1000
     # steps the global error grows to a few tens of that (IDA at the same tolerances
     # shows 3 on this problem). Measured in those units, dnasim must stay below 10.
-    ida = solve_with_ida(robertson, (0, 4e10), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2],
-                         rtol=1e-6, atol=atol, t_eval=t_out)  # fmt: skip
+    ida = solve_with_ida(
+        robertson,
+        (0, 4e10),
+        ROBERTSON_Y0,
+        ROBERTSON_YP0,
+        algebraic=[2],
+        rtol=1e-6,
+        atol=atol,
+        t_eval=t_out,
+    )
     scale = 1e-6 * np.abs(ref_y) + atol[:, None]
     ours_err = np.max(np.abs(ours.y - ref_y) / scale)
     ida_err = np.max(np.abs(ida.y[:, 1:] - ref_y) / scale)
     assert ours_err < 10, (ours_err, ida_err)
     # Mass conservation y1 + y2 + y3 = 1 is the algebraic equation: it holds to the
     # Newton tolerance, 0.33 * (rtol * 1 + atol) ~ 3e-7, in practice far better (IDA: ~4e-9).
-    every_step = solve_dae(robertson, (0, 4e10), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2],
-                           rtol=1e-6, atol=atol)  # fmt: skip
+    every_step = solve_dae(
+        robertson, (0, 4e10), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2], rtol=1e-6, atol=atol
+    )
     assert np.max(np.abs(every_step.y.sum(axis=0) - 1.0)) < 1e-8
 
 
@@ -110,10 +147,19 @@ def test_akzo_nobel_reaches_six_significant_digits():
 def test_akzo_agrees_with_ida_on_the_same_residual():
     from dnasim.testing.ida import solve_with_ida
 
-    ours = solve_dae(akzo, (0, 180), AKZO_Y0, algebraic=[5], rtol=1e-7, atol=1e-7,
-                     t_eval=[0, 1, 10, 100, 180])  # fmt: skip
-    ida = solve_with_ida(akzo, (0, 180), AKZO_Y0, ours.yp[:, 0], algebraic=[5], rtol=1e-7,
-                         atol=1e-7, t_eval=[1, 10, 100, 180])  # fmt: skip
+    ours = solve_dae(
+        akzo, (0, 180), AKZO_Y0, algebraic=[5], rtol=1e-7, atol=1e-7, t_eval=[0, 1, 10, 100, 180]
+    )
+    ida = solve_with_ida(
+        akzo,
+        (0, 180),
+        AKZO_Y0,
+        ours.yp[:, 0],
+        algebraic=[5],
+        rtol=1e-7,
+        atol=1e-7,
+        t_eval=[1, 10, 100, 180],
+    )
     # Two integrators at tolerance 1e-7 agree to their global errors, some 1e-5 relative.
     np.testing.assert_allclose(ours.y[:, 1:], ida.y[:, 1:], rtol=1e-4, atol=1e-8)
 
@@ -174,10 +220,19 @@ def _robertson_jacobian(t, y, yp, cj):
 
 def test_analytic_jacobian_gives_the_same_solution_without_difference_quotients():
     atol = np.array([1e-8, 1e-14, 1e-8])
-    fd = solve_dae(robertson, (0, 40), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2], rtol=1e-6,
-                   atol=atol)  # fmt: skip
-    exact = solve_dae(robertson, (0, 40), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2], rtol=1e-6,
-                      atol=atol, jac=_robertson_jacobian)  # fmt: skip
+    fd = solve_dae(
+        robertson, (0, 40), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2], rtol=1e-6, atol=atol
+    )
+    exact = solve_dae(
+        robertson,
+        (0, 40),
+        ROBERTSON_Y0,
+        ROBERTSON_YP0,
+        algebraic=[2],
+        rtol=1e-6,
+        atol=atol,
+        jac=_robertson_jacobian,
+    )
     # Both are solutions to rtol 1e-6; they differ by the small changes in step choice.
     np.testing.assert_allclose(exact.y[:, -1], fd.y[:, -1], rtol=1e-4, atol=1e-12)
     # Without finite differences every residual evaluation is a Newton iteration (or the
@@ -193,7 +248,14 @@ def test_algebraic_components_are_found_when_not_given():
 
 
 def test_excluding_algebraic_components_from_the_error_test():
-    res = solve_dae(akzo, (0, 180), AKZO_Y0, algebraic=[5], rtol=1e-6, atol=1e-6,
-                    exclude_algebraic_from_error=True)  # fmt: skip
+    res = solve_dae(
+        akzo,
+        (0, 180),
+        AKZO_Y0,
+        algebraic=[5],
+        rtol=1e-6,
+        atol=1e-6,
+        exclude_algebraic_from_error=True,
+    )
     # The algebraic y6 = ks y1 y4 follows the differential ones: the answer keeps 4 digits.
     assert significant_digits(res.y[:, -1], AKZO_REF) >= 4.0

@@ -79,7 +79,13 @@ def test_singular_iteration_matrix_names_the_variable():
         return np.array([yp[0] + y[0], y[0] - 1.0])  # y[1] appears nowhere
 
     with pytest.raises(DAEError) as info:
-        solve_dae(residual, (0, 1), [1.0, 0.0], algebraic=[1], calc_initial=False,
-                  variable_names=["level", "flow"])  # fmt: skip
+        solve_dae(
+            residual,
+            (0, 1),
+            [1.0, 0.0],
+            algebraic=[1],
+            calc_initial=False,
+            variable_names=["level", "flow"],
+        )
     message = str(info.value)
     assert "singular" in message and "flow" in message

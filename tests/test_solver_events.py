@@ -24,8 +24,9 @@ def _bouncing_ball(restitution, t_end, rtol=1e-10):
         return np.array([0.0, -restitution * y[1]]), np.array([-restitution * y[1], -G])
 
     impact.action = bounce
-    return solve_dae(residual, (0, t_end), [10.0, 0.0], [0.0, -G], events=[impact],
-                     rtol=rtol, atol=1e-12)  # fmt: skip
+    return solve_dae(
+        residual, (0, t_end), [10.0, 0.0], [0.0, -G], events=[impact], rtol=rtol, atol=1e-12
+    )
 
 
 def test_falling_ball_first_impact_and_later_impacts():
@@ -106,5 +107,7 @@ def test_direction_filters_crossings():
 
 def test_callback_streams_every_output_point():
     seen = []
-    res = solve_dae(lambda t, y, yp: yp + y, (0, 1), [1.0], callback=lambda t, y, yp: seen.append(t))
+    res = solve_dae(
+        lambda t, y, yp: yp + y, (0, 1), [1.0], callback=lambda t, y, yp: seen.append(t)
+    )
     assert seen == list(res.t)

@@ -34,7 +34,7 @@ class HeatExchanger(Component):
         Param("C_wall", "J/K", doc="wall heat capacity", min=0.0),
         Param("n_sections", "1", 1, "number of sections", min=1, kind="int"),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow", min=0.0),
-        Param("dT_reg", "K", 0.01, "LMTD regularisation temperature", min=0.0),
+        Param("dT_reg", "K", 1.0, "LMTD regularisation width (exact LMTD for differences >~ 10 dT_reg)", min=0.0),
         Param("hot_T0", "K", None, "initial hot fluid temperature (given start)", min=0.0),
         Param("cold_T0", "K", None, "initial cold fluid temperature (given start)", min=0.0),
         Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),

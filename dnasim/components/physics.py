@@ -33,8 +33,11 @@ def properties(medium, p, h):
 
 
 def softplus(x, eps):
-    """eps * ln(1 + exp(x / eps)): a smooth, strictly positive version of max(x, 0)."""
-    return eps * np.logaddexp(0.0, np.asarray(x, dtype=float) / eps)
+    """eps * ln(1 + exp(x / eps)) + 1e-9 eps: a smooth, strictly positive max(x, 0).
+
+    The floor 1e-9 eps keeps the value from underflowing to zero (for x < -745 eps),
+    where the logarithmic mean below would otherwise jump."""
+    return eps * (np.logaddexp(0.0, np.asarray(x, dtype=float) / eps) + 1e-9)
 
 
 def logarithmic_mean(x, y):
@@ -72,6 +75,13 @@ def lmtd(dT_a, dT_b, dT_reg):
     difference dT_a. It is smooth everywhere (also when the two differences have
     opposite signs, which happens during Newton iterations) because it is built
     from the logarithmic mean of softplus(+dT) minus that of softplus(-dT).
+
+    Why the regularisation width matters: the exact LMTD has an infinite slope
+    where one end's difference reaches zero (dL/db = a / (b ln^2(a/b)) as b -> 0),
+    so after a step of the inlet temperature of a pipe at thermal equilibrium the
+    heat flow ODE is not Lipschitz and Newton fails. With width dT_reg the slope
+    is bounded by about a / (dT_reg ln^2(a/dT_reg)); for |dT| >~ 10 dT_reg the
+    value is the exact LMTD to 1e-4 relative.
     """
     a_pos = softplus(dT_a, dT_reg)
     b_pos = softplus(dT_b, dT_reg)

@@ -61,8 +61,9 @@ class Pipe(Component):
         Param(
             "internal_energy",
             "1",
-            "mean",
-            "U = M (u_in+u_out)/2 (seed) or U = M u_out",
+            None,
+            "U = M (u_in+u_out)/2 ('mean', seed) or U = M u_out ('outlet'); default: mean for one "
+            "volume, outlet for several",
             kind="string",
             choices=("mean", "outlet"),
         ),
@@ -72,7 +73,7 @@ class Pipe(Component):
         Param(
             "m_reg", "kg/s", None, "friction regularisation flow (default 1e-4 m_nominal)", min=0.0
         ),
-        Param("dT_reg", "K", 0.01, "LMTD regularisation temperature", min=0.0),
+        Param("dT_reg", "K", 1.0, "LMTD regularisation width (exact LMTD for differences >~ 10 dT_reg)", min=0.0),
         Param("p0", "Pa", None, "initial fluid pressure (given start)", min=0.0),
         Param("T0", "K", None, "initial fluid temperature (given start)", min=0.0),
         Param("T_wall0", "K", None, "initial wall temperature (given start), default T0", min=0.0),

@@ -93,9 +93,22 @@ def solve_dae(
     ``result`` attribute holds the solution up to the last accepted step.
     """
     problem = _Problem.validate(
-        residual, t_span, y0, yp0, algebraic, rtol, atol, max_order, h0, max_step,
-        jac_sparsity, events, tstops, t_eval, variable_names,
-    )  # fmt: skip
+        residual,
+        t_span,
+        y0,
+        yp0,
+        algebraic,
+        rtol,
+        atol,
+        max_order,
+        h0,
+        max_step,
+        jac_sparsity,
+        events,
+        tstops,
+        t_eval,
+        variable_names,
+    )
     stats = SolverStats()
     F = CountedResidual(residual, problem.n, stats)
     matrix = IterationMatrix(F, problem.n, jac, problem.sparsity, variable_names)
@@ -121,11 +134,21 @@ def solve_dae(
     if calc_initial:
         y, yp = consistent(t0, y, yp)
     solver = NordsieckBDF(
-        F, t0, y, yp,
-        rtol=rtol, atol=problem.atol, max_order=max_order, h0=h0, max_step=max_step,
-        error_mask=error_mask, matrix=matrix, stats=stats, t_scale=span,
+        F,
+        t0,
+        y,
+        yp,
+        rtol=rtol,
+        atol=problem.atol,
+        max_order=max_order,
+        h0=h0,
+        max_step=max_step,
+        error_mask=error_mask,
+        matrix=matrix,
+        stats=stats,
+        t_scale=span,
         names=variable_names,
-    )  # fmt: skip
+    )
     out = _Output(problem.t_eval, callback, dense_output, t0)
     out.initial(t0, y, yp)
     switches = [SwitchFunction.wrap(g, i) for i, g in enumerate(events)]
@@ -139,11 +162,17 @@ def solve_dae(
 
     def partial_result(success, status, message):
         return DAEResult(
-            *out.arrays(problem.n), success, status, message,
+            *out.arrays(problem.n),
+            success,
+            status,
+            message,
             [np.array(v) for v in t_events],
             [np.array(v).reshape(-1, problem.n) for v in y_events],
-            event_log, stats.as_dict(), out.step_history(), out.solution(),
-        )  # fmt: skip
+            event_log,
+            stats.as_dict(),
+            out.step_history(),
+            out.solution(),
+        )
 
     try:
         while solver.t < t_end:
@@ -157,12 +186,17 @@ def solve_dae(
             solver.step(next_stop, left_limit=next_stop < t_end)
             g_new = [sw.value(solver.t, solver.y, solver.yp) for sw in switches]
             cut = _earliest_crossing(solver, switches, g_old, g_new, t_prev)
-            for k, t_star, y_star, yp_star, g_star, iterates, restarting in cut:
+            for k, t_star, y_star, _yp_star, _g_star, iterates, _restarting in cut:
                 sw = switches[k]
                 event_log.append(
-                    {"event": k, "name": sw.name, "t": t_star, "iterates": iterates,
-                     "terminal": sw.terminal}
-                )  # fmt: skip
+                    {
+                        "event": k,
+                        "name": sw.name,
+                        "t": t_star,
+                        "iterates": iterates,
+                        "terminal": sw.terminal,
+                    }
+                )
                 t_events[k].append(t_star)
                 y_events[k].append(y_star)
             if cut and cut[-1][-1]:
@@ -170,7 +204,10 @@ def solve_dae(
                 sw = switches[k]
                 out.step(solver, t_prev, t_star)
                 if sw.terminal:
-                    status, message = 1, f"A terminal switch, {sw.name!r}, fired at t = {t_star:.10g}."
+                    status, message = (
+                        1,
+                        f"A terminal switch, {sw.name!r}, fired at t = {t_star:.10g}.",
+                    )
                     break
                 if t_star == last_restart_t:
                     restarts_here += 1
@@ -204,6 +241,10 @@ def solve_dae(
         error = DAEError(str(exc))
         error.result = result
         raise error from None
+    except KeyboardInterrupt as exc:
+        # Ctrl-C: hand the caller what was computed (it may write it to disk).
+        exc.result = partial_result(False, -2, f"Interrupted at t = {solver.t:.10g}.")
+        raise
     return partial_result(True, status, message)
 
 
@@ -306,9 +347,23 @@ class _Problem:
 
     @classmethod
     def validate(
-        cls, residual, t_span, y0, yp0, algebraic, rtol, atol, max_order, h0, max_step,
-        sparsity, events, tstops, t_eval, names,
-    ):  # fmt: skip
+        cls,
+        residual,
+        t_span,
+        y0,
+        yp0,
+        algebraic,
+        rtol,
+        atol,
+        max_order,
+        h0,
+        max_step,
+        sparsity,
+        events,
+        tstops,
+        t_eval,
+        names,
+    ):
         p = cls()
         if not callable(residual):
             raise DAEError("residual must be a function F(t, y, yp) -> array.")

@@ -244,7 +244,7 @@ class NordsieckBDF:
         if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not np.isfinite(h):
             raise DAEError(
                 self._failure_message(
-                    t_new, h, "the step size fell to round-off level (h = %.3g)" % h
+                    t_new, h, f"the step size fell to round-off level (h = {h:.3g})"
                 )
             )
 
@@ -411,9 +411,7 @@ class NordsieckBDF:
         new_q, eta = q, _eta(error, q)
         if self.steps_at_this_h >= q + 1 and not self.fixed_order:
             if q > 1:
-                err_down = nd.lower_order_error_coefficient(q) * self.norm(
-                    self.z[q], error_weights
-                )
+                err_down = nd.lower_order_error_coefficient(q) * self.norm(self.z[q], error_weights)
                 eta_down = _eta(err_down, q - 1)
                 if eta_down > eta:
                     new_q, eta = q - 1, eta_down

@@ -116,9 +116,7 @@ class IterationMatrix:
                 self.sparse = False
                 matrix = np.asarray(matrix, dtype=float)
             if matrix.shape != (self.n, self.n):
-                raise DAEError(
-                    f"jac returned shape {matrix.shape}; expected ({self.n}, {self.n})."
-                )
+                raise DAEError(f"jac returned shape {matrix.shape}; expected ({self.n}, {self.n}).")
         else:
             inc = SQRT_EPS * np.maximum(np.abs(y), np.abs(h * yp))
             inc = np.maximum(inc, 1.0 / weights)
@@ -130,7 +128,7 @@ class IterationMatrix:
         self._lu = None
 
     def finite_difference(self, t, y, yp, f0, inc, dy_coef, dyp_coef):
-        """Columns (F(y + a_j inc_j e_j, yp + b_j inc_j e_j) - f0) / inc_j, a = dy_coef, b = dyp_coef.
+        """Columns (F(y + a_j inc_j e_j, yp + b_j inc_j e_j) - f0) / inc_j (a, b: the coefficients).
 
         With a = 1, b = cj this is dF/dy + cj dF/dy'; with a and b 0/1 masks it is the
         Jacobian of F with respect to a mix of y and y' components (used to make the

@@ -35,7 +35,7 @@ A step-size change by the factor r scales row j by r**j (seed eq. 10.9).
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from math import comb, factorial
 
 import numpy as np
@@ -43,7 +43,7 @@ import numpy as np
 MAX_ORDER = 5
 
 
-@lru_cache(maxsize=None)
+@cache
 def pascal_matrix(q: int) -> np.ndarray:
     """Upper-triangular Pascal matrix of size q + 1: P[i, j] = C(j, i) for j >= i."""
     p = np.zeros((q + 1, q + 1))
@@ -54,7 +54,7 @@ def pascal_matrix(q: int) -> np.ndarray:
     return p
 
 
-@lru_cache(maxsize=None)
+@cache
 def l_vector(q: int) -> np.ndarray:
     """Coefficients l[0..q] of Lambda(x) = prod_{i=1..q} (1 + x/i), the BDF-q correction vector."""
     coeffs = np.array([1.0])
@@ -106,7 +106,7 @@ def rescale(z: np.ndarray, q: int, ratio: float) -> None:
         z[j] *= factor
 
 
-@lru_cache(maxsize=None)
+@cache
 def order_decrease_coefficients(q: int) -> np.ndarray:
     """Coefficients of x^2 (x + 1) ... (x + q - 2), degree q, for dropping order q to q - 1.
 

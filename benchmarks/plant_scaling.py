@@ -1,0 +1,145 @@
+"""Scaling of the plant model: a steam pipe split into N volumes, inlet temperature step.
+
+    .venv/bin/python benchmarks/plant_scaling.py                 # N = 10 30 100 300 1000
+    .venv/bin/python benchmarks/plant_scaling.py --sizes 10 30   # quick run
+    .venv/bin/python benchmarks/plant_scaling.py --no-ida
+
+Plant: steam reservoir (50 bar, 500 C, stepping to 520 C at t = 1 s) -> Pipe
+(20 m, D = 0.1 m, kA = 6283 W/K, C_wall = 1.3e5 J/K, N volumes) -> valve ->
+45 bar. About 2 kg/s; steady start; simulated to t_end = 60 s (two wall time
+constants). For each N the same assembled residual is integrated by dnasim's
+solve_dae and by SUNDIALS IDA (scikit-sundae; dense LU for N <= 30, otherwise
+sparse LU with the declared sparsity), both at rtol = 1e-6 and the same atol
+vector. Printed per N: unknowns, wall time per simulated second, steps,
+residual evaluations, the share of wall time spent inside property calls
+(medium.state, cache hits included) and the ratio of the wall times IDA/dnasim
+(> 1: dnasim faster).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from dnasim.components import Pipe, PressureBoundary, Valve
+from dnasim.media import get_medium
+from dnasim.network import Plant
+from dnasim.timefunctions import Step
+
+T_END = 60.0
+
+
+def steam_pipe(n):
+    plant = Plant(f"steam_pipe_{n}", medium="Water")
+    L, D, s = 20.0, 0.1, 0.005
+    plant.add(PressureBoundary("steam", p=50e5, T=Step(1.0, 773.15, 793.15), m_nominal=2.0))
+    plant.add(
+        Pipe(
+            "pipe",
+            V=math.pi / 4 * D**2 * L,
+            kA=1000.0 * math.pi * D * L,
+            k=2e5,
+            C_wall=7850.0 * math.pi * (D + s) * s * L * 500.0,
+            n_volumes=n,
+            m_nominal=2.0,
+        )
+    )
+    plant.add(Valve("valve", C=0.003, opening=1.0, m_nominal=2.0))
+    plant.add(PressureBoundary("sink", p=45e5, m_nominal=2.0))
+    for a, b in [("steam.port", "in"), ("pipe.inlet", "in"), ("pipe.outlet", "out"), ("valve.inlet", "out"),
+                 ("valve.outlet", "exit"), ("sink.port", "exit")]:
+        plant.connect(a, b)
+    return plant
+
+
+class PropertyTimer:
+    """Wraps medium.state on the shared Water instance and accumulates its wall time."""
+
+    def __init__(self, medium):
+        self.medium = medium
+        self.inner = type(medium).state.__get__(medium)
+        self.seconds = 0.0
+        self.calls = 0
+
+    def __enter__(self):
+        def timed(p, h):
+            t0 = time.perf_counter()
+            try:
+                return self.inner(p, h)
+            finally:
+                self.seconds += time.perf_counter() - t0
+                self.calls += 1
+
+        self.medium.state = timed
+        return self
+
+    def __exit__(self, *exc):
+        del self.medium.state
+
+
+def run(n, solver, rtol=1e-6, linsolver=None):
+    plant = steam_pipe(n)
+    dae = plant.assemble()
+    y0, yp0 = plant.initial_values(0.0, "steady")
+    water = get_medium("Water")
+    with PropertyTimer(water) as timer:
+        t0 = time.perf_counter()
+        if solver == "dnasim":
+            from dnasim.solver import solve_dae
+
+            res = solve_dae(dae.residual, (0.0, T_END), y0, yp0, algebraic=dae.algebraic, rtol=rtol,
+                            atol=dae.atol_vector(1e-6, y0), jac_sparsity=dae.jac_sparsity,
+                            tstops=dae.tstops(0.0, T_END), calc_initial=False, dense_output=False)
+        else:
+            from dnasim.ida_reference import solve_with_ida
+
+            res = solve_with_ida(dae, (0.0, T_END), y0, yp0, rtol=rtol, atol=dae.atol_vector(1e-6, y0),
+                                 tstops=dae.tstops(0.0, T_END), linsolver=linsolver)
+        wall = time.perf_counter() - t0
+    T_out = water.state(res.y[dae.index["out.p"], -1], res.y[dae.index["out.h"], -1]).T
+    return {
+        "n": dae.n,
+        "wall": wall,
+        "steps": res.stats["steps"],
+        "fevals": res.stats["residual_evals"],
+        "prop_share": timer.seconds / wall,
+        "T_out": T_out,
+        "ok": bool(res.success),
+    }
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 300, 1000])
+    ap.add_argument("--no-ida", action="store_true", help="skip the IDA comparison")
+    args = ap.parse_args(argv)
+    header = (f"{'N':>5} {'unknowns':>8} {'s/sim-s':>9} {'steps':>6} {'F evals':>8} {'prop %':>7} "
+              f"{'T_out K':>9} | {'IDA s/sim-s':>11} {'IDA steps':>9} {'IDA F':>7} {'IDA prop %':>10} "
+              f"{'IDA/dnasim':>10}")
+    print(header)
+    print("-" * len(header))
+    for n in args.sizes:
+        ours = run(n, "dnasim")
+        line = (f"{n:>5} {ours['n']:>8} {ours['wall'] / T_END:>9.4f} {ours['steps']:>6} {ours['fevals']:>8} "
+                f"{100 * ours['prop_share']:>6.1f}% {ours['T_out']:>9.3f}")
+        if not ours["ok"]:
+            line += " (dnasim FAILED)"
+        if not args.no_ida:
+            lin = "dense" if n <= 30 else "sparse"
+            ida = run(n, "ida", linsolver=lin)
+            line += (f" | {ida['wall'] / T_END:>11.4f} {ida['steps']:>9} {ida['fevals']:>7} "
+                     f"{100 * ida['prop_share']:>9.1f}% {ida['wall'] / ours['wall']:>10.2f}")
+            if not ida["ok"]:
+                line += " (IDA FAILED)"
+            if abs(ida["T_out"] - ours["T_out"]) > 1e-2:
+                line += f" (T_out differs: IDA {ida['T_out']:.3f})"
+        print(line, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    np.seterr(all="ignore")
+    raise SystemExit(main())

@@ -1,0 +1,34 @@
+"""The component reference, generated from the library: ``python -m dnasim.reference``.
+
+It writes Markdown with, for every registered component type, exactly what
+``dnasim components NAME`` prints (ports, parameters with units, defaults and
+ranges, equations). ``docs/components.md`` is this module's output; a test keeps
+the two in step.
+"""
+
+from __future__ import annotations
+
+import sys
+
+
+def component_reference_markdown() -> str:
+    """Markdown text of the whole component library."""
+    from dnasim.plantfile import _registry, component_info
+    from dnasim.runner import format_component
+
+    registry = _registry()
+    parts = [
+        "# Component reference",
+        "",
+        "Generated from the library by `python -m dnasim.reference > docs/components.md`;",
+        "`dnasim components NAME` prints the same for one type. All quantities in SI units.",
+        "",
+    ]
+    for name in sorted(registry):
+        info = component_info(registry[name])
+        parts += [f"## {name}", "", "```", format_component(info).rstrip(), "```", ""]
+    return "\n".join(parts)
+
+
+if __name__ == "__main__":
+    sys.stdout.write(component_reference_markdown())
