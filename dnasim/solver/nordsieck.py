@@ -64,16 +64,19 @@ def l_vector(q: int) -> np.ndarray:
     return coeffs
 
 
+@cache
 def harmonic(q: int) -> float:
     """l[1] of order q: 1 + 1/2 + ... + 1/q."""
     return float(sum(1.0 / i for i in range(1, q + 1)))
 
 
+@cache
 def error_coefficient(q: int) -> float:
     """Milne's factor turning Delta = y_C - y_P into the local error of BDF-q."""
     return 1.0 / ((q + 1) * harmonic(q) + 1.0)
 
 
+@cache
 def lower_order_error_coefficient(q: int) -> float:
     """Factor turning z[q] into the local error the method of order q - 1 would make.
 
@@ -83,6 +86,7 @@ def lower_order_error_coefficient(q: int) -> float:
     return factorial(q - 1) / harmonic(q - 1)
 
 
+@cache
 def higher_order_error_coefficient(q: int) -> float:
     """Factor turning Delta_n - Delta_{n-1} into the local error of order q + 1.
 
