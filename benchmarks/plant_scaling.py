@@ -49,8 +49,14 @@ def steam_pipe(n):
     )
     plant.add(Valve("valve", C=0.003, opening=1.0, m_nominal=2.0))
     plant.add(PressureBoundary("sink", p=45e5, m_nominal=2.0))
-    for a, b in [("steam.port", "in"), ("pipe.inlet", "in"), ("pipe.outlet", "out"), ("valve.inlet", "out"),
-                 ("valve.outlet", "exit"), ("sink.port", "exit")]:
+    for a, b in [
+        ("steam.port", "in"),
+        ("pipe.inlet", "in"),
+        ("pipe.outlet", "out"),
+        ("valve.inlet", "out"),
+        ("valve.outlet", "exit"),
+        ("sink.port", "exit"),
+    ]:
         plant.connect(a, b)
     return plant
 
@@ -90,14 +96,32 @@ def run(n, solver, rtol=1e-6, linsolver=None):
         if solver == "dnasim":
             from dnasim.solver import solve_dae
 
-            res = solve_dae(dae.residual, (0.0, T_END), y0, yp0, algebraic=dae.algebraic, rtol=rtol,
-                            atol=dae.atol_vector(1e-6, y0), jac_sparsity=dae.jac_sparsity,
-                            tstops=dae.tstops(0.0, T_END), calc_initial=False, dense_output=False)
+            res = solve_dae(
+                dae.residual,
+                (0.0, T_END),
+                y0,
+                yp0,
+                algebraic=dae.algebraic,
+                rtol=rtol,
+                atol=dae.atol_vector(1e-6, y0),
+                jac_sparsity=dae.jac_sparsity,
+                tstops=dae.tstops(0.0, T_END),
+                calc_initial=False,
+                dense_output=False,
+            )
         else:
             from dnasim.ida_reference import solve_with_ida
 
-            res = solve_with_ida(dae, (0.0, T_END), y0, yp0, rtol=rtol, atol=dae.atol_vector(1e-6, y0),
-                                 tstops=dae.tstops(0.0, T_END), linsolver=linsolver)
+            res = solve_with_ida(
+                dae,
+                (0.0, T_END),
+                y0,
+                yp0,
+                rtol=rtol,
+                atol=dae.atol_vector(1e-6, y0),
+                tstops=dae.tstops(0.0, T_END),
+                linsolver=linsolver,
+            )
         wall = time.perf_counter() - t0
     T_out = water.state(res.y[dae.index["out.p"], -1], res.y[dae.index["out.h"], -1]).T
     return {
@@ -116,22 +140,29 @@ def main(argv=None):
     ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 300, 1000])
     ap.add_argument("--no-ida", action="store_true", help="skip the IDA comparison")
     args = ap.parse_args(argv)
-    header = (f"{'N':>5} {'unknowns':>8} {'s/sim-s':>9} {'steps':>6} {'F evals':>8} {'prop %':>7} "
-              f"{'T_out K':>9} | {'IDA s/sim-s':>11} {'IDA steps':>9} {'IDA F':>7} {'IDA prop %':>10} "
-              f"{'IDA/dnasim':>10}")
+    header = (
+        f"{'N':>5} {'unknowns':>8} {'s/sim-s':>9} {'steps':>6} {'F evals':>8} {'prop %':>7} "
+        f"{'T_out K':>9} | {'IDA s/sim-s':>11} {'IDA steps':>9} {'IDA F':>7} {'IDA prop %':>10} "
+        f"{'IDA/dnasim':>10}"
+    )
     print(header)
     print("-" * len(header))
     for n in args.sizes:
         ours = run(n, "dnasim")
-        line = (f"{n:>5} {ours['n']:>8} {ours['wall'] / T_END:>9.4f} {ours['steps']:>6} {ours['fevals']:>8} "
-                f"{100 * ours['prop_share']:>6.1f}% {ours['T_out']:>9.3f}")
+        line = (
+            f"{n:>5} {ours['n']:>8} {ours['wall'] / T_END:>9.4f} {ours['steps']:>6} "
+            f"{ours['fevals']:>8} "
+            f"{100 * ours['prop_share']:>6.1f}% {ours['T_out']:>9.3f}"
+        )
         if not ours["ok"]:
             line += " (dnasim FAILED)"
         if not args.no_ida:
             lin = "dense" if n <= 30 else "sparse"
             ida = run(n, "ida", linsolver=lin)
-            line += (f" | {ida['wall'] / T_END:>11.4f} {ida['steps']:>9} {ida['fevals']:>7} "
-                     f"{100 * ida['prop_share']:>9.1f}% {ida['wall'] / ours['wall']:>10.2f}")
+            line += (
+                f" | {ida['wall'] / T_END:>11.4f} {ida['steps']:>9} {ida['fevals']:>7} "
+                f"{100 * ida['prop_share']:>9.1f}% {ida['wall'] / ours['wall']:>10.2f}"
+            )
             if not ida["ok"]:
                 line += " (IDA FAILED)"
             if abs(ida["T_out"] - ours["T_out"]) > 1e-2:

@@ -66,10 +66,19 @@ class PlantEvent:
         return float(self.switch.function(t, b.local(y), b.local(yp)))
 
     def action(self, t, y, yp):
-        if self.switch.action is not None:
-            b = self.block
-            self.switch.action(t, b.local(y), b.local(yp))
-        return None
+        """Run the component's action; if it changed its variables (e.g. a
+        controller resetting its integral), return the new (y, yp)."""
+        if self.switch.action is None:
+            return None
+        b = self.block
+        x, xp = b.local(y), b.local(yp)
+        x0 = x.data.copy()
+        self.switch.action(t, x, xp)
+        if np.array_equal(x.data, x0):
+            return None
+        y = np.array(y, dtype=float)
+        y[b.gidx] = x.data
+        return y, np.array(yp, dtype=float)
 
 
 class AssembledDAE:
@@ -123,7 +132,7 @@ class AssembledDAE:
         for comp in plant.components.values():
             gidx, index, local_names = [], {}, []
 
-            def add_local(name, g):
+            def add_local(name, g, index=index, gidx=gidx, local_names=local_names):
                 index[name] = len(gidx)
                 gidx.append(g)
                 local_names.append(name)
@@ -193,7 +202,7 @@ class AssembledDAE:
         self.n_equations = len(eq_names)
         self.names = names
         self.index = {nm: i for i, nm in enumerate(names)}
-        self.units = dict(zip(names, units))
+        self.units = dict(zip(names, units, strict=False))
         self.nominal = np.array(nominal, dtype=float)
         self.var_owner = owner
         self.accumulator = np.array(accumulator, dtype=bool)
@@ -237,7 +246,8 @@ class AssembledDAE:
                 ne = b.eq_slice.stop - b.eq_slice.start
                 if nr != ne:
                     raise PlantError(
-                        f"component '{b.comp.name}' ({type(b.comp).__name__}) returned {nr} residuals "
+                        f"component '{b.comp.name}' ({type(b.comp).__name__}) returned {nr} "
+                        "residuals "
                         f"but declares {ne} equations"
                     )
             F[b.eq_slice] = r
@@ -317,7 +327,8 @@ def _local(index, ref, comp, eq):
         ) from None
     if isinstance(k, slice):
         raise PlantError(
-            f"component '{comp.name}': equation '{eq.name}' refers to the whole vector '{ref}'; name elements"
+            f"component '{comp.name}': equation '{eq.name}' refers to the whole vector '{ref}'; "
+            "name elements"
         )
     return k
 

@@ -14,8 +14,13 @@ from dnasim.network import Plant
 from dnasim.timefunctions import Ramp
 
 
-def air_pipe_plant(n_volumes: int = 1, *, T_in: float = 600.0, T_initial: float = 300.0,
-                   internal_energy: str | None = None) -> Plant:
+def air_pipe_plant(
+    n_volumes: int = 1,
+    *,
+    T_in: float = 600.0,
+    T_initial: float = 300.0,
+    internal_energy: str | None = None,
+) -> Plant:
     """Hot air entering a cold pipe (seed 10.2.2). Simulate with start="given".
 
     A steel pipe, 10 m long, inner diameter 0.1 m, wall 5 mm:
@@ -60,8 +65,14 @@ def air_pipe_plant(n_volumes: int = 1, *, T_in: float = 600.0, T_initial: float 
     return plant
 
 
-def attemperator_plant(*, T_steam_high: float = 560.0 + 273.15, ramp=(10.0, 60.0),
-                       Kp: float = 0.01, KI: float = 5e-5, anti_windup: bool = False) -> Plant:
+def attemperator_plant(
+    *,
+    T_steam_high: float = 560.0 + 273.15,
+    ramp=(10.0, 60.0),
+    Kp: float = 0.01,
+    KI: float = 5e-5,
+    anti_windup: bool = False,
+) -> Plant:
     """Steam temperature control (seed 10.2.3). Simulate with start="steady".
 
     Superheated steam (40 bar reservoir, 500 C, about 10 kg/s) flows through the
@@ -81,15 +92,28 @@ def attemperator_plant(*, T_steam_high: float = 560.0 + 273.15, ramp=(10.0, 60.0
     (the seed's Table 10.1 has 216.8 s). Simulate to 400 s.
     """
     plant = Plant("attemperation", medium="Water")
-    plant.add(PressureBoundary("steam", p=40e5, T=Ramp(ramp[0], ramp[1], 500.0 + 273.15, T_steam_high),
-                               m_nominal=10.0))
+    plant.add(
+        PressureBoundary(
+            "steam", p=40e5, T=Ramp(ramp[0], ramp[1], 500.0 + 273.15, T_steam_high), m_nominal=10.0
+        )
+    )
     plant.add(PressureBoundary("water", p=60e5, T=150.0 + 273.15, m_nominal=0.5))
     plant.add(Attemperator("att", V=0.5, k=6500.0, m_nominal=10.0))
     plant.add(Valve("spray_valve", C=4.9e-4, m_nominal=0.5))
     plant.add(Valve("turbine_valve", C=0.0149, opening=1.0, m_nominal=10.0))
     plant.add(PressureBoundary("turbine", p=35e5, m_nominal=10.0))
-    plant.add(PIController("pi", Kp=Kp, KI=KI, setpoint=450.0 + 273.15, z_min=0.0, z_max=1.0,
-                           anti_windup=anti_windup, measured_nominal=700.0))
+    plant.add(
+        PIController(
+            "pi",
+            Kp=Kp,
+            KI=KI,
+            setpoint=450.0 + 273.15,
+            z_min=0.0,
+            z_max=1.0,
+            anti_windup=anti_windup,
+            measured_nominal=700.0,
+        )
+    )
     plant.connect("steam.port", "steam_in")
     plant.connect("att.steam_in", "steam_in")
     plant.connect("water.port", "water_supply")

@@ -16,8 +16,24 @@ from types import SimpleNamespace
 import numpy as np
 
 
-def solve_with_ida(dae, t_span, y0, yp0, *, rtol=1e-6, atol=1e-8, max_order=4, max_step=np.inf, h0=None,
-                   events=(), tstops=(), t_eval=None, callback=None, linsolver=None, max_num_steps=100000):
+def solve_with_ida(
+    dae,
+    t_span,
+    y0,
+    yp0,
+    *,
+    rtol=1e-6,
+    atol=1e-8,
+    max_order=4,
+    max_step=np.inf,
+    h0=None,
+    events=(),
+    tstops=(),
+    t_eval=None,
+    callback=None,
+    linsolver=None,
+    max_num_steps=100000,
+):
     from sksundae.ida import IDA
 
     from dnasim.initialization import solve_mixed
@@ -37,8 +53,12 @@ def solve_with_ida(dae, t_span, y0, yp0, *, rtol=1e-6, atol=1e-8, max_order=4, m
 
     def make(calc):
         opts = dict(
-            rtol=rtol, atol=np.asarray(atol, dtype=float) * np.ones(n), algebraic_idx=alg_idx,
-            max_order=min(max_order, 5), max_num_steps=max_num_steps, linsolver=linsolver,
+            rtol=rtol,
+            atol=np.asarray(atol, dtype=float) * np.ones(n),
+            algebraic_idx=alg_idx,
+            max_order=min(max_order, 5),
+            max_num_steps=max_num_steps,
+            linsolver=linsolver,
         )
         if linsolver == "sparse":
             opts["sparsity"] = dae.jac_sparsity
@@ -50,9 +70,11 @@ def solve_with_ida(dae, t_span, y0, yp0, *, rtol=1e-6, atol=1e-8, max_order=4, m
             opts["calc_initcond"] = "yp0"
             opts["calc_init_dt"] = 1e-3 * (t_end - t0)
         if events:
+
             def eventsfn(t, y, yp, out):
                 for i, g in enumerate(events):
                     out[i] = g(t, y, yp)
+
             eventsfn.terminal = [True] * len(events)
             eventsfn.direction = [int(getattr(g, "direction", 0)) for g in events]
             opts["eventsfn"] = eventsfn
@@ -90,7 +112,9 @@ def solve_with_ida(dae, t_span, y0, yp0, *, rtol=1e-6, atol=1e-8, max_order=4, m
             ie = np.asarray(res.i_events).reshape(-1, len(events))[-1]
             for i in np.flatnonzero(ie):
                 g = events[i]
-                log.append({"event": int(i), "name": getattr(g, "name", str(i)), "iterates": [], "t": t})
+                log.append(
+                    {"event": int(i), "name": getattr(g, "name", str(i)), "iterates": [], "t": t}
+                )
                 act = getattr(g, "action", None)
                 if act is not None:
                     out = act(t, y, yp)
@@ -106,7 +130,16 @@ def solve_with_ida(dae, t_span, y0, yp0, *, rtol=1e-6, atol=1e-8, max_order=4, m
             solver.init_step(t, y, yp)
     stats["residual_evals"] = counter[0]
     return SimpleNamespace(
-        t=np.array(ts), y=np.array(ys).T, yp=np.array(yps).T, success=success, status=0 if success else -1,
-        message=message, t_events=[], y_events=[], event_log=log, stats=stats,
-        step_history=np.array(hist).reshape(-1, 3), sol=None,
+        t=np.array(ts),
+        y=np.array(ys).T,
+        yp=np.array(yps).T,
+        success=success,
+        status=0 if success else -1,
+        message=message,
+        t_events=[],
+        y_events=[],
+        event_log=log,
+        stats=stats,
+        step_history=np.array(hist).reshape(-1, 3),
+        sol=None,
     )

@@ -59,7 +59,7 @@ def fd_jacobian(fun, u, f0, pattern, colors, scale):
         du[cols] = step
         f1 = fun(u + du)
         df = f1 - f0
-        for j, hj in zip(cols, step):
+        for j, hj in zip(cols, step, strict=False):
             rows = pat.indices[pat.indptr[j] : pat.indptr[j + 1]]
             rows_out.append(rows)
             cols_out.append(np.full(rows.size, j))
@@ -104,7 +104,7 @@ def solve_mixed(dae, t0, y, yp, y_unknown, *, tol=1e-10, max_iter=60, what="init
             f"{what}: the initial guess is outside the model's domain: {err}"
         ) from None
     row_scale = None
-    for it in range(max_iter):
+    for _ in range(max_iter):
         J = fd_jacobian(fun, u, f, pattern, colors, scale)
         if row_scale is None:
             row_scale = np.asarray(abs(J).multiply(scale[None, :]).max(axis=1).todense()).ravel()
@@ -115,11 +115,15 @@ def solve_mixed(dae, t0, y, yp, y_unknown, *, tol=1e-10, max_iter=60, what="init
         except RuntimeError:
             raise PlantError(
                 f"{what}: the Jacobian is singular at t = {t0:g}; the plant has no unique "
-                f"{'steady state' if np.all(y_unknown | dae.accumulator) else 'consistent state'} from this guess"
+                f"{'steady state' if np.all(y_unknown | dae.accumulator) else 'consistent state'} "
+                "from this guess"
             ) from None
         if not np.all(np.isfinite(du)):
             raise PlantError(f"{what}: Newton step not finite (singular Jacobian)")
         norm0 = np.linalg.norm(f / row_scale)
+        if np.max(np.abs(f / row_scale)) < 1e-13:
+            # residual at round-off level (in units of the variables it determines)
+            return unpack(u)
         lam = 1.0
         while True:
             u_new = u + lam * du
@@ -142,5 +146,6 @@ def solve_mixed(dae, t0, y, yp, y_unknown, *, tol=1e-10, max_iter=60, what="init
             return unpack(u)
     worst = int(np.argmax(np.abs(f / row_scale)))
     raise PlantError(
-        f"{what}: Newton did not converge in {max_iter} iterations (largest residual: {dae.eq_names[worst]})"
+        f"{what}: Newton did not converge in {max_iter} iterations (largest residual: "
+        f"{dae.eq_names[worst]})"
     )

@@ -109,12 +109,14 @@ class Plant:
             )
         if not isinstance(node, str) or not node or "." in node:
             raise PlantError(
-                f"plant '{self.name}': node name must be a non-empty string without '.', got {node!r}"
+                f"plant '{self.name}': node name must be a non-empty string without '.', got "
+                f"{node!r}"
             )
         key = (comp.name, port)
         if key in self.connections:
             raise PlantError(
-                f"component '{comp.name}': port '{port}' is already connected to node '{self.connections[key]}'"
+                f"component '{comp.name}': port '{port}' is already connected to node "
+                f"'{self.connections[key]}'"
             )
         self.connections[key] = node
         self._dae = None
@@ -208,7 +210,8 @@ class Plant:
         msgs = []
         for node, cname in errors:
             msgs.append(
-                f"node '{node}' joins different fluids: '{node_med[node][0]}' (from '{node_med[node][1]}') "
+                f"node '{node}' joins different fluids: '{node_med[node][0]}' (from "
+                f"'{node_med[node][1]}') "
                 f"and '{comp_med[cname]}' (from '{cname}')"
             )
         for name, comp in self.components.items():

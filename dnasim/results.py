@@ -13,7 +13,8 @@ class PlantResults:
     t : ndarray [s]
     names : list of output names ("a.p", "pipe1.M[0]", "pipe1.T_out", "a.T", ...)
     units : dict name -> unit string
-    results : dict name -> ndarray over t (also ``res[name]``)
+    results : dict name -> ndarray over t (also ``res[name]``); derived outputs
+        (temperatures, ...) cost property calls and are computed on first access
     y, yp : raw solution arrays (n x len(t)) in the order of ``variable_names``
     stats : solver statistics (steps, residual_evals, ...) plus wall_time [s]
     step_history : array of (t, h, order) per accepted step
@@ -21,12 +22,27 @@ class PlantResults:
     success, message : how the integration ended
     """
 
-    def __init__(self, t, names, units, values, y, yp, variable_names, stats, step_history, event_log,
-                 success, message, sol=None):
+    def __init__(
+        self,
+        t,
+        names,
+        units,
+        values,
+        y,
+        yp,
+        variable_names,
+        stats,
+        step_history,
+        event_log,
+        success,
+        message,
+        sol=None,
+    ):
         self.t = t
         self.names = names
         self.units = units
-        self.results = dict(zip(names, values))
+        self._values = values  # array (names x t), or a callable computing it on first use
+        self._results = None
         self.y = y
         self.yp = yp
         self.variable_names = variable_names
@@ -44,8 +60,11 @@ class PlantResults:
         yp = np.asarray(res.yp, dtype=float)
         names = dae.output_names()
         units = dae.output_units()
-        rows = np.array([dae.output_row(t[k], y[:, k], yp[:, k]) for k in range(t.size)])
-        values = rows.T if rows.size else np.zeros((len(names), 0))
+
+        def values():
+            rows = np.array([dae.output_row(t[k], y[:, k], yp[:, k]) for k in range(t.size)])
+            return rows.T if rows.size else np.zeros((len(names), 0))
+
         stats = dict(res.stats)
         if wall_time is not None:
             stats["wall_time"] = wall_time
@@ -61,17 +80,39 @@ class PlantResults:
                 e["switch"] = ev.switch.name
                 e.setdefault("name", ev.name)
             log.append(e)
-        return cls(t, names, units, values, y, yp, list(dae.names), stats, np.asarray(res.step_history),
-                   log, bool(res.success), str(res.message), getattr(res, "sol", None))
+        return cls(
+            t,
+            names,
+            units,
+            values,
+            y,
+            yp,
+            list(dae.names),
+            stats,
+            np.asarray(res.step_history),
+            log,
+            bool(res.success),
+            str(res.message),
+            getattr(res, "sol", None),
+        )
+
+    @property
+    def results(self) -> dict:
+        if self._results is None:
+            vals = self._values() if callable(self._values) else self._values
+            self._results = dict(zip(self.names, vals, strict=True))
+        return self._results
 
     def __getitem__(self, name):
         try:
             return self.results[name]
         except KeyError:
-            raise KeyError(f"no output named {name!r}; e.g. {', '.join(self.names[:8])} ...") from None
+            raise KeyError(
+                f"no output named {name!r}; e.g. {', '.join(self.names[:8])} ..."
+            ) from None
 
     def __contains__(self, name):
-        return name in self.results
+        return name in self.names
 
     def unit(self, name):
         return self.units[name]
@@ -80,7 +121,9 @@ class PlantResults:
         """A pandas DataFrame indexed by t, one column per name (needs pandas)."""
         import pandas as pd
 
-        return pd.DataFrame({n: self.results[n] for n in self.names}, index=pd.Index(self.t, name="t"))
+        return pd.DataFrame(
+            {n: self.results[n] for n in self.names}, index=pd.Index(self.t, name="t")
+        )
 
     def __repr__(self):
         return (

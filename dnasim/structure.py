@@ -8,7 +8,8 @@ Checks, in order (later ones need the earlier ones to pass):
 3. counting: per component, equations = own variables + outlet ports (each
    outlet fixes its node's enthalpy); for the plant, equations = unknowns;
 4. structural regularity: a maximum matching between equations and variables
-   (networkx bipartite matching, a variable and its derivative count as one);
+   (Hopcroft-Karp, ``scipy.sparse.csgraph.maximum_bipartite_matching``; a variable
+   and its derivative count as one);
    unmatched equations and variables are named by component;
 5. index 1: a maximum matching between the equations and {y'_i of the
    differential variables, y_j of the algebraic ones}. If it is not perfect the
@@ -23,7 +24,9 @@ from __future__ import annotations
 from collections import defaultdict
 
 import networkx as nx
-from networkx.algorithms import bipartite
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import maximum_bipartite_matching
 
 from dnasim.errors import PlantError
 
@@ -65,12 +68,14 @@ def _check_wiring(plant, report):
         for port in comp.fluid_ports():
             if (name, port.name) not in plant.connections:
                 report.errors.append(
-                    f"component '{name}' ({type(comp).__name__}): fluid port '{port.name}' is not connected (dangling)"
+                    f"component '{name}' ({type(comp).__name__}): fluid port '{port.name}' is not "
+                    "connected (dangling)"
                 )
         for sig in comp.signal_inputs():
             if (name, sig.name) not in plant.links:
                 report.errors.append(
-                    f"component '{name}' ({type(comp).__name__}): signal input '{sig.name}' is not linked (dangling)"
+                    f"component '{name}' ({type(comp).__name__}): signal input '{sig.name}' is "
+                    "not linked (dangling)"
                 )
     for node in plant.node_names():
         ports = plant.ports_at(node)
@@ -78,7 +83,8 @@ def _check_wiring(plant, report):
         flowing = [(c, p) for c, p in ports if p.role != "probe"]
         if len(flowing) < 2:
             report.errors.append(
-                f"node '{node}' connects only {labels}: a fluid port must meet at least one other port"
+                f"node '{node}' connects only {labels}: a fluid port must meet at least one other "
+                "port"
             )
             continue
         outlets = [f"{c}.{p.name}" for c, p in ports if p.role == "outlet"]
@@ -89,7 +95,8 @@ def _check_wiring(plant, report):
             )
         elif len(outlets) > 1:
             report.errors.append(
-                f"node '{node}' is fed by several outlets ({', '.join(outlets)}): join streams with a Mixer "
+                f"node '{node}' is fed by several outlets ({', '.join(outlets)}): join streams "
+                "with a Mixer "
                 f"(a sink boundary must not be given h or T)"
             )
 
@@ -103,8 +110,10 @@ def _check_counts(plant, dae, report):
         if n_eq != n_own + n_out:
             what = "too many" if n_eq > n_own + n_out else "too few"
             report.errors.append(
-                f"component '{comp.name}' ({type(comp).__name__}) declares {n_eq} equations for {n_own} own "
-                f"variables and {n_out} outlet enthalpies ({n_own + n_out} needed): {what} equations"
+                f"component '{comp.name}' ({type(comp).__name__}) declares {n_eq} equations for "
+                f"{n_own} own "
+                f"variables and {n_out} outlet enthalpies ({n_own + n_out} needed): {what} "
+                "equations"
             )
     if dae.n_equations != dae.n:
         report.errors.append(
@@ -118,17 +127,23 @@ def _matching(n_eq, n_var, rows):
     the unmatched equations, and the variables (and their equations) reachable
     from the unmatched variables. Unlike the unmatched items of one particular
     matching these sets do not depend on which maximum matching was found."""
-    g = nx.Graph()
-    eqs = [("e", i) for i in range(n_eq)]
-    g.add_nodes_from(eqs, bipartite=0)
-    g.add_nodes_from((("v", j) for j in range(n_var)), bipartite=1)
     cols_of = [list(c) for c in rows]
     rows_of = [[] for _ in range(n_var)]
     for i, cols in enumerate(rows):
         for j in cols:
-            g.add_edge(("e", i), ("v", j))
             rows_of[j].append(i)
-    m = bipartite.hopcroft_karp_matching(g, top_nodes=eqs)
+    # Hopcroft-Karp on the biadjacency matrix (scipy, iterative). networkx's
+    # bipartite.hopcroft_karp_matching is recursive and exceeds Python's recursion
+    # limit on a pipe of ~1000 volumes (a long alternating path).
+    r = [i for i, cols in enumerate(rows) for _ in cols]
+    c = [j for cols in rows for j in cols]
+    bi = sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(n_eq, n_var))
+    match_of_eq = maximum_bipartite_matching(bi, perm_type="column")  # var index or -1
+    m = {}
+    for i, j in enumerate(match_of_eq):
+        if j >= 0:
+            m[("e", i)] = ("v", int(j))
+            m[("v", int(j))] = ("e", i)
     un_eq = [i for i in range(n_eq) if ("e", i) not in m]
     un_var = [j for j in range(n_var) if ("v", j) not in m]
     over_eq, stack = set(un_eq), list(un_eq)
@@ -151,7 +166,7 @@ def _matching(n_eq, n_var, rows):
 
 
 def _check_matching(plant, dae, report):
-    full_rows = [sorted(set(a) | set(b)) for a, b in zip(dae.rows_y, dae.rows_yp)]
+    full_rows = [sorted(set(a) | set(b)) for a, b in zip(dae.rows_y, dae.rows_yp, strict=False)]
     over, under = _matching(dae.n_equations, dae.n, full_rows)
     if over or under:
         report.unmatched_equations = [dae.eq_names[i] for i in over]
@@ -172,7 +187,7 @@ def _check_matching(plant, dae, report):
     diff = dae.differential
     idx_rows = [
         sorted({j for j in yp if diff[j]} | {j for j in y if not diff[j]})
-        for y, yp in zip(dae.rows_y, dae.rows_yp)
+        for y, yp in zip(dae.rows_y, dae.rows_yp, strict=False)
     ]
     over, under = _matching(dae.n_equations, dae.n, idx_rows)
     plain = _pressure_conflicts(plant)
@@ -183,7 +198,8 @@ def _check_matching(plant, dae, report):
         labels = [f"d({nm})/dt" if diff[j] else nm for j, nm in enumerate(dae.names)]
         report.unmatched_variables = [labels[j] for j in under]
         report.errors.append(
-            "the DAE has index > 1: its equations cannot be solved for the algebraic variables and the "
+            "the DAE has index > 1: its equations cannot be solved for the algebraic variables "
+            "and the "
             "derivatives of the differential ones. Over-determined equations: "
             + _by_owner(dae.eq_names, dae.eq_owner, over)
             + "; under-determined unknowns: "
@@ -197,7 +213,9 @@ def _by_owner(names, owners, idx):
         groups[owners[i]].append(names[i])
     if not groups:
         return "none"
-    return "; ".join(f"in '{o}': {', '.join(v[:6])}{' ...' if len(v) > 6 else ''}" for o, v in groups.items())
+    return "; ".join(
+        f"in '{o}': {', '.join(v[:6])}{' ...' if len(v) > 6 else ''}" for o, v in groups.items()
+    )
 
 
 def _pressure_conflicts(plant):
@@ -216,7 +234,7 @@ def _pressure_conflicts(plant):
         equal = [
             plant.connections[(name, p.name)] for p in comp.fluid_ports() if p.pressure == "equal"
         ]
-        for a, b in zip(equal, equal[1:]):
+        for a, b in zip(equal, equal[1:], strict=False):
             parent[find(a)] = find(b)
     owners = defaultdict(list)
     for (cname, pname), node in plant.connections.items():
@@ -224,7 +242,7 @@ def _pressure_conflicts(plant):
         if port.pressure in ("storage", "fixed"):
             owners[find(node)].append((cname, pname, port.pressure, node))
     out = []
-    for group, who in owners.items():
+    for who in owners.values():
         if len(who) < 2:
             continue
         nodes = sorted({w[3] for w in who})
@@ -235,8 +253,10 @@ def _pressure_conflicts(plant):
         out.append(
             f"node{'s' if len(nodes) > 1 else ''} {', '.join(repr(n) for n in nodes)}: "
             + " and ".join(parts)
-            + " are joined with no flow resistance between them, so the pressure there is set twice "
-            "and the DAE has index 2. Put a flow resistance between them (a Valve, or a Pipe, whose "
+            + " are joined with no flow resistance between them, so the pressure there is set "
+            "twice "
+            "and the DAE has index 2. Put a flow resistance between them (a Valve, or a Pipe, "
+            "whose "
             "inlet has friction)."
         )
     return out

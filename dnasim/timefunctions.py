@@ -42,7 +42,7 @@ class TimeFunction:
     def __call__(self, t: float) -> float:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def scaled(self, factor: float, offset: float = 0.0) -> "TimeFunction":
+    def scaled(self, factor: float, offset: float = 0.0) -> TimeFunction:
         """Return ``factor * f(t) + offset`` as a time function (same breakpoints)."""
         return _Affine(self, factor, offset)
 

@@ -20,7 +20,7 @@ def result(plant):
 def test_steady_outlet_enthalpy_is_mass_weighted_mix(plant):
     dae = plant.assemble()
     y, yp = plant.initial_values(0.0, "steady")
-    v = dict(zip(dae.names, y))
+    v = dict(zip(dae.names, y, strict=False))
     ms, mw = v["att.m_steam"], v["att.m_water"]
     mix = (ms * v["steam_in.h"] + mw * v["spray.h"]) / (ms + mw)
     # Exact identity of the steady equations (dM/dt = dU/dt = 0); the damped

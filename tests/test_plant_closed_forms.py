@@ -20,12 +20,28 @@ CP = get_medium("Air").state(1e5, 3e5).cp
 def fixed_wall_pipe(n, heat_transfer, kA=150.0, T_in=600.0, T_wall=300.0):
     plant = Plant("fixed_wall", medium="Air")
     plant.add(PressureBoundary("src", p=2e5, T=T_in, m_nominal=0.1))
-    plant.add(Pipe("pipe", V=0.08, kA=kA, k=1.2e5, T_wall=T_wall, n_volumes=n, heat_transfer=heat_transfer,
-                   m_nominal=0.1))
+    plant.add(
+        Pipe(
+            "pipe",
+            V=0.08,
+            kA=kA,
+            k=1.2e5,
+            T_wall=T_wall,
+            n_volumes=n,
+            heat_transfer=heat_transfer,
+            m_nominal=0.1,
+        )
+    )
     plant.add(Valve("valve", C=3.2e-4, opening=1.0, m_nominal=0.1))
     plant.add(PressureBoundary("sink", p=1e5, m_nominal=0.1))
-    for a, b in [("src.port", "in"), ("pipe.inlet", "in"), ("pipe.outlet", "out"), ("valve.inlet", "out"),
-                 ("valve.outlet", "exit"), ("sink.port", "exit")]:
+    for a, b in [
+        ("src.port", "in"),
+        ("pipe.inlet", "in"),
+        ("pipe.outlet", "out"),
+        ("valve.inlet", "out"),
+        ("valve.outlet", "exit"),
+        ("sink.port", "exit"),
+    ]:
         plant.connect(a, b)
     return plant
 
@@ -33,7 +49,7 @@ def fixed_wall_pipe(n, heat_transfer, kA=150.0, T_in=600.0, T_wall=300.0):
 def steady_outlet(plant):
     dae = plant.assemble()
     y, _ = plant.initial_values(0.0, "steady")
-    row = dict(zip(dae.output_names(), dae.output_row(0.0, y, np.zeros_like(y))))
+    row = dict(zip(dae.output_names(), dae.output_row(0.0, y, np.zeros_like(y)), strict=False))
     return row["pipe.T_out"], row["pipe.m[0]"]
 
 
@@ -71,9 +87,9 @@ def test_discretisation_error_falls_with_n():
     # first order: quadrupling n divides the error by ~4 (3.5 .. 4.5 allows the
     # higher-order terms: 3.71 and 3.92 in exact arithmetic at NTU = 1.5);
     # second order: by ~16 (13 .. 17; exact 16.19 and 16.01).
-    for e1, e2 in zip(errors["outlet"], errors["outlet"][1:]):
+    for e1, e2 in zip(errors["outlet"], errors["outlet"][1:], strict=False):
         assert 3.5 < e1 / e2 < 4.5
-    for e1, e2 in zip(errors["mean"], errors["mean"][1:]):
+    for e1, e2 in zip(errors["mean"], errors["mean"][1:], strict=False):
         assert 13.0 < e1 / e2 < 17.0
 
 
@@ -85,11 +101,19 @@ def test_lumped_wall_first_order_response():
     m, T_in, T0, kA, C = 0.1, 400.0, 300.0, 100.0, 1.0e4
     plant = Plant("wall", medium="Air")
     plant.add(MassFlowBoundary("src", m=m, T=T_in, m_nominal=m))
-    plant.add(Pipe("pipe", V=1e-3, kA=kA, k=1e5, C_wall=C, m_nominal=m, p0=1.05e5, T0=T0, T_wall0=T0))
+    plant.add(
+        Pipe("pipe", V=1e-3, kA=kA, k=1e5, C_wall=C, m_nominal=m, p0=1.05e5, T0=T0, T_wall0=T0)
+    )
     plant.add(Valve("valve", C=m / math.sqrt(5e3), opening=1.0, m_nominal=m))
     plant.add(PressureBoundary("sink", p=1e5, m_nominal=m))
-    for a, b in [("src.port", "in"), ("pipe.inlet", "in"), ("pipe.outlet", "out"), ("valve.inlet", "out"),
-                 ("valve.outlet", "exit"), ("sink.port", "exit")]:
+    for a, b in [
+        ("src.port", "in"),
+        ("pipe.inlet", "in"),
+        ("pipe.outlet", "out"),
+        ("valve.inlet", "out"),
+        ("valve.outlet", "exit"),
+        ("sink.port", "exit"),
+    ]:
         plant.connect(a, b)
     tau = C / (m * CP * (1 - math.exp(-kA / (m * CP))))
     t_eval = np.linspace(0, 3 * tau, 31)

@@ -13,8 +13,9 @@ def stepped_air_pipe():
     plant = air_pipe_plant(n_volumes=3)
     # replace the source by one whose temperature steps from 600 K to 700 K at t = 200 s
     src = plant.components["source"]
-    plant.components["source"] = PressureBoundary("source", p=2.0e5, T=Step(200.0, 600.0, 700.0),
-                                                  m_nominal=src.params["m_nominal"])
+    plant.components["source"] = PressureBoundary(
+        "source", p=2.0e5, T=Step(200.0, 600.0, 700.0), m_nominal=src.params["m_nominal"]
+    )
     plant._dae = None
     return plant
 
@@ -26,7 +27,9 @@ def test_mass_and_energy_balance_to_solver_tolerance():
     assert 200.0 in res.t  # the step is a tstop: the integrator lands on it
     stored_mass = res["pipe1.M_total"] - res["pipe1.M_total"][0]
     passed_mass = res["source.M_passed"] - res["exhaust.M_passed"]
-    stored_energy = (res["pipe1.U_total"] + res["pipe1.E_wall"]) - (res["pipe1.U_total"] + res["pipe1.E_wall"])[0]
+    stored_energy = (res["pipe1.U_total"] + res["pipe1.E_wall"]) - (
+        res["pipe1.U_total"] + res["pipe1.E_wall"]
+    )[0]
     passed_energy = res["source.H_passed"] - res["exhaust.H_passed"]
     throughput_mass = res["source.M_passed"][-1]
     throughput_energy = res["source.H_passed"][-1]
@@ -54,5 +57,7 @@ def test_running_integrals_match_quadrature_of_boundary_flows():
     assert abs(stored - (m_in - m_out)) < 1e-3 * m_in
     h_in = np.trapezoid(res["source.m"] * res["inlet.h"], res.t)
     h_out = np.trapezoid(res["exhaust.m"] * res["exit.h"], res.t)
-    e_stored = (res["pipe1.U_total"] + res["pipe1.E_wall"])[-1] - (res["pipe1.U_total"] + res["pipe1.E_wall"])[0]
+    e_stored = (res["pipe1.U_total"] + res["pipe1.E_wall"])[-1] - (
+        res["pipe1.U_total"] + res["pipe1.E_wall"]
+    )[0]
     assert abs(e_stored - (h_in - h_out)) < 1e-3 * abs(h_in)

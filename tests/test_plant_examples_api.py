@@ -26,9 +26,10 @@ def test_air_pipe_heats_and_approaches_inlet(air):
     # mass and energy balance (running integrals at the boundaries, see
     # test_plant_conservation for the reasoning): rtol of the throughput
     dM = air["pipe1.M_total"] - air["pipe1.M_total"][0]
-    assert np.max(np.abs(dM - (air["source.M_passed"] - air["exhaust.M_passed"]))) < 1e-6 * air[
-        "source.M_passed"
-    ][-1]
+    assert (
+        np.max(np.abs(dM - (air["source.M_passed"] - air["exhaust.M_passed"])))
+        < 1e-6 * air["source.M_passed"][-1]
+    )
 
 
 def test_air_pipe_step_size_grows_towards_steady_state(air):
@@ -54,16 +55,28 @@ def test_results_are_named_with_units(air):
 def test_output_row_and_callback_stream():
     plant = air_pipe_plant(1)
     rows = []
-    res = plant.simulate(10.0, start="given", callback=lambda t, y, yp: rows.append(plant.output_row(t, y, yp)))
+    res = plant.simulate(
+        10.0, start="given", callback=lambda t, y, yp: rows.append(plant.output_row(t, y, yp))
+    )
     names = plant.output_names()
     assert len(rows) == res.t.size
-    last = dict(zip(names, rows[-1]))
+    last = dict(zip(names, rows[-1], strict=False))
     assert last["pipe1.T_out"] == pytest.approx(res["pipe1.T_out"][-1], rel=1e-12)
 
 
 def test_registry_and_describe():
-    for name in ["PressureBoundary", "MassFlowBoundary", "Pipe", "Valve", "Attemperator", "PIController",
-                 "Mixer", "Splitter", "HeatExchanger", "TemperatureSensor"]:
+    for name in [
+        "PressureBoundary",
+        "MassFlowBoundary",
+        "Pipe",
+        "Valve",
+        "Attemperator",
+        "PIController",
+        "Mixer",
+        "Splitter",
+        "HeatExchanger",
+        "TemperatureSensor",
+    ]:
         cls = REGISTRY[name]
         text = cls.describe()
         assert name in text and "parameters" in text
@@ -77,7 +90,9 @@ def test_time_functions():
     r = Ramp(1.0, 3.0, 0.0, 10.0)
     assert r(0.0) == 0.0 and r(2.0) == 5.0 and r(4.0) == 10.0 and r.breakpoints == (1.0, 3.0)
     tb = Table([0.0, 1.0, 3.0], [0.0, 2.0, 0.0])
-    assert tb(0.5) == 1.0 and tb(2.0) == 1.0 and tb(5.0) == 0.0 and tb.breakpoints == (0.0, 1.0, 3.0)
+    assert (
+        tb(0.5) == 1.0 and tb(2.0) == 1.0 and tb(5.0) == 0.0 and tb.breakpoints == (0.0, 1.0, 3.0)
+    )
     sn = Sine(1.0, 2.0, 4.0)
     assert sn(1.0) == pytest.approx(3.0) and sn.breakpoints == ()
     assert isinstance(as_time_function(2), Constant)

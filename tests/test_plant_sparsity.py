@@ -31,8 +31,20 @@ def hx_plant():
     """Water heat exchanger fed by a split-and-remixed cold stream, with a sensor."""
     plant = Plant("hx", medium="Water")
     plant.add(PressureBoundary("hot_src", p=3e5, T=360.0, m_nominal=0.5))
-    plant.add(HeatExchanger("hx", hot_V=0.01, cold_V=0.01, hot_kA=2e3, cold_kA=2e3, hot_k=1e5, cold_k=1e5,
-                            C_wall=5e3, n_sections=3, m_nominal=0.5))
+    plant.add(
+        HeatExchanger(
+            "hx",
+            hot_V=0.01,
+            cold_V=0.01,
+            hot_kA=2e3,
+            cold_kA=2e3,
+            hot_k=1e5,
+            cold_k=1e5,
+            C_wall=5e3,
+            n_sections=3,
+            m_nominal=0.5,
+        )
+    )
     plant.add(Valve("hot_valve", C=1e-3, opening=1.0, m_nominal=0.5))
     plant.add(PressureBoundary("hot_sink", p=1e5, m_nominal=0.5))
     plant.add(MassFlowBoundary("cold_src", m=0.5, T=290.0, m_nominal=0.5))
@@ -45,13 +57,31 @@ def hx_plant():
     plant.add(PressureBoundary("cold_sink", p=1e5, m_nominal=0.5))
     plant.add(TemperatureSensor("sensor", tau=2.0))
     wires = [
-        ("hot_src.port", "h1"), ("hx.hot_in", "h1"), ("hx.hot_out", "h2"), ("hot_valve.inlet", "h2"),
-        ("sensor.port", "h2"), ("hot_valve.outlet", "h3"), ("hot_sink.port", "h3"),
-        ("cold_src.port", "c1"), ("split.inlet", "c1"), ("split.outlet1", "c2"), ("split.outlet2", "c3"),
-        ("va.inlet", "c2"), ("vb.inlet", "c3"), ("va.outlet", "c4"), ("vb.outlet", "c5"),
-        ("mix.inlet1", "c4"), ("mix.inlet2", "c5"), ("mix.outlet", "c6"), ("cold_pipe.inlet", "c6"),
-        ("cold_pipe.outlet", "c7"), ("hx.cold_in", "c7"), ("hx.cold_out", "c8"), ("cold_valve.inlet", "c8"),
-        ("cold_valve.outlet", "c9"), ("cold_sink.port", "c9"),
+        ("hot_src.port", "h1"),
+        ("hx.hot_in", "h1"),
+        ("hx.hot_out", "h2"),
+        ("hot_valve.inlet", "h2"),
+        ("sensor.port", "h2"),
+        ("hot_valve.outlet", "h3"),
+        ("hot_sink.port", "h3"),
+        ("cold_src.port", "c1"),
+        ("split.inlet", "c1"),
+        ("split.outlet1", "c2"),
+        ("split.outlet2", "c3"),
+        ("va.inlet", "c2"),
+        ("vb.inlet", "c3"),
+        ("va.outlet", "c4"),
+        ("vb.outlet", "c5"),
+        ("mix.inlet1", "c4"),
+        ("mix.inlet2", "c5"),
+        ("mix.outlet", "c6"),
+        ("cold_pipe.inlet", "c6"),
+        ("cold_pipe.outlet", "c7"),
+        ("hx.cold_in", "c7"),
+        ("hx.cold_out", "c8"),
+        ("cold_valve.inlet", "c8"),
+        ("cold_valve.outlet", "c9"),
+        ("cold_sink.port", "c9"),
     ]
     for a, b in wires:
         plant.connect(a, b)
@@ -99,7 +129,9 @@ def test_declared_pattern_covers_probed(name):
             # the row's magnitude are real dependencies
             noise = 1e-6 * (np.abs(F0) + row_scale * np.max(np.abs(col)) + 1.0)
             for i in np.flatnonzero((np.abs(col) > noise) & ~pattern[:, j]):
-                missing.append(f"{dae.eq_names[i]} depends on {which}[{dae.names[j]}] ({col[i]:.3g})")
+                missing.append(
+                    f"{dae.eq_names[i]} depends on {which}[{dae.names[j]}] ({col[i]:.3g})"
+                )
     assert not missing, "\n".join(missing[:20])
 
 

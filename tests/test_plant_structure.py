@@ -3,7 +3,16 @@
 import numpy as np
 import pytest
 
-from dnasim.components import Component, Equation, FluidPort, Param, Pipe, PressureBoundary, Valve, Variable
+from dnasim.components import (
+    Component,
+    Equation,
+    FluidPort,
+    Param,
+    Pipe,
+    PressureBoundary,
+    Valve,
+    Variable,
+)
 from dnasim.errors import PlantError
 from dnasim.examples import air_pipe_plant, attemperator_plant
 from dnasim.network import Plant
@@ -21,7 +30,10 @@ class _Resistor(Component):
         return [Variable("m", "kg/s", 1.0)]
 
     def equations(self):
-        eqs = [Equation("flow", y=("m", "inlet.p", "outlet.p")), Equation("enthalpy", y=("outlet.h", "inlet.h"))]
+        eqs = [
+            Equation("flow", y=("m", "inlet.p", "outlet.p")),
+            Equation("enthalpy", y=("outlet.h", "inlet.h")),
+        ]
         if self.params["variant"] == "extra":
             eqs.append(Equation("extra", y=("m",)))
         if self.params["variant"] == "missing":
@@ -29,7 +41,10 @@ class _Resistor(Component):
         return eqs
 
     def residual(self, t, x, xp):
-        r = [x["m"] - self.params["G"] * (x["inlet.p"] - x["outlet.p"]), x["outlet.h"] - x["inlet.h"]]
+        r = [
+            x["m"] - self.params["G"] * (x["inlet.p"] - x["outlet.p"]),
+            x["outlet.h"] - x["inlet.h"],
+        ]
         if self.params["variant"] == "extra":
             r.append(x["m"] - 1.0)
         if self.params["variant"] == "missing":
@@ -42,14 +57,23 @@ def chain(middle):
     plant.add(PressureBoundary("src", p=2e5, T=300.0))
     plant.add(middle)
     plant.add(PressureBoundary("sink", p=1e5))
-    for a, b in [("src.port", "a"), (f"{middle.name}.inlet", "a"), (f"{middle.name}.outlet", "b"),
-                 ("sink.port", "b")]:
+    for a, b in [
+        ("src.port", "a"),
+        (f"{middle.name}.inlet", "a"),
+        (f"{middle.name}.outlet", "b"),
+        ("sink.port", "b"),
+    ]:
         plant.connect(a, b)
     return plant
 
 
 def test_good_plants_pass():
-    for plant in (air_pipe_plant(1), air_pipe_plant(5), attemperator_plant(), chain(_Resistor("r"))):
+    for plant in (
+        air_pipe_plant(1),
+        air_pipe_plant(5),
+        attemperator_plant(),
+        chain(_Resistor("r")),
+    ):
         report = plant.check()
         assert report.ok, str(report)
         assert report.n_equations == report.n_unknowns
@@ -61,7 +85,9 @@ def test_dangling_port_names_component_and_port():
     plant.connect("spare.inlet", "outlet")
     report = plant.check()
     assert not report.ok
-    assert any("'spare'" in e and "'outlet'" in e and "dangling" in e for e in report.errors), report.errors
+    assert any("'spare'" in e and "'outlet'" in e and "dangling" in e for e in report.errors), (
+        report.errors
+    )
     with pytest.raises(PlantError, match="spare"):
         plant.simulate(1.0)
 
@@ -77,7 +103,9 @@ def test_extra_equation_names_component():
     report = chain(_Resistor("res1", variant="extra")).check()
     assert not report.ok
     assert any("'res1'" in e and "too many" in e for e in report.errors), report.errors
-    assert any("res1.extra" in e or "res1" in e for e in report.errors if "structurally singular" in e)
+    assert any(
+        "res1.extra" in e or "res1" in e for e in report.errors if "structurally singular" in e
+    )
 
 
 def test_missing_equation_names_component():
@@ -94,12 +122,22 @@ def test_two_volumes_without_resistance_is_explained():
     plant.add(PressureBoundary("src", p=2e5, T=300.0))
     plant.add(Pipe("pipe1", V=0.1, k=1e5))
     plant.add(PressureBoundary("sink", p=1e5))
-    for a, b in [("src.port", "a"), ("pipe1.inlet", "a"), ("pipe1.outlet", "b"), ("sink.port", "b")]:
+    for a, b in [
+        ("src.port", "a"),
+        ("pipe1.inlet", "a"),
+        ("pipe1.outlet", "b"),
+        ("sink.port", "b"),
+    ]:
         plant.connect(a, b)
     report = plant.check()
     assert not report.ok
     text = "\n".join(report.errors)
-    assert "'pipe1'" in text and "'sink'" in text and "no flow resistance" in text and "index 2" in text
+    assert (
+        "'pipe1'" in text
+        and "'sink'" in text
+        and "no flow resistance" in text
+        and "index 2" in text
+    )
     assert "index > 1" in text  # confirmed by the matching, with names
     assert "pipe1.density" in text or "pipe1.internal_energy" in text
 
@@ -115,9 +153,18 @@ def test_two_storage_volumes_joined():
     plant.add(Attemperator("att", V=0.5, k=6500.0))
     plant.add(Valve("v", C=0.01, opening=1.0))
     plant.add(PressureBoundary("out", p=35e5))
-    for a, b in [("w.port", "n1"), ("feed.inlet", "n1"), ("feed.outlet", "n2"), ("att.water_in", "n2"),
-                 ("s.port", "n3"), ("att.steam_in", "n3"), ("att.outlet", "n4"), ("v.inlet", "n4"),
-                 ("v.outlet", "n5"), ("out.port", "n5")]:
+    for a, b in [
+        ("w.port", "n1"),
+        ("feed.inlet", "n1"),
+        ("feed.outlet", "n2"),
+        ("att.water_in", "n2"),
+        ("s.port", "n3"),
+        ("att.steam_in", "n3"),
+        ("att.outlet", "n4"),
+        ("v.inlet", "n4"),
+        ("v.outlet", "n5"),
+        ("out.port", "n5"),
+    ]:
         plant.connect(a, b)
     report = plant.check()
     text = "\n".join(report.errors)

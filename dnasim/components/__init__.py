@@ -48,3 +48,16 @@ __all__ = [
     "TemperatureSensor",
     "Valve",
 ]
+
+
+def _import_all_component_modules():
+    """Import every module of this package, so that a new component file registers
+    itself in REGISTRY without an edit here."""
+    import importlib
+    import pkgutil
+
+    for info in pkgutil.iter_modules(__path__):
+        importlib.import_module(f"{__name__}.{info.name}")
+
+
+_import_all_component_modules()

@@ -43,9 +43,10 @@ registers itself in ``REGISTRY`` under its class name.
 
 from __future__ import annotations
 
+import inspect
 import textwrap
-from dataclasses import dataclass, field
-from typing import Callable
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -75,7 +76,7 @@ class _Required:
 REQUIRED = _Required()
 
 #: type name -> component class, filled automatically by ``Component.__init_subclass__``.
-REGISTRY: dict[str, type["Component"]] = {}
+REGISTRY: dict[str, type[Component]] = {}
 
 
 @dataclass(frozen=True)
@@ -230,18 +231,21 @@ class LocalVector:
 def _check_number(comp, param, value):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise PlantError(
-            f"component '{comp}': parameter '{param.name}' must be a number [{param.unit}], got {value!r}"
+            f"component '{comp}': parameter '{param.name}' must be a number [{param.unit}], got "
+            f"{value!r}"
         )
     value = float(value)
     if not np.isfinite(value):
         raise PlantError(f"component '{comp}': parameter '{param.name}' is not finite ({value!r})")
     if param.min is not None and value < param.min:
         raise PlantError(
-            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is below its minimum {param.min:g}"
+            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is below its "
+            f"minimum {param.min:g}"
         )
     if param.max is not None and value > param.max:
         raise PlantError(
-            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is above its maximum {param.max:g}"
+            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is above its "
+            f"maximum {param.max:g}"
         )
     return value
 
@@ -274,14 +278,16 @@ class Component:
     def __init__(self, name: str, **params):
         if not isinstance(name, str) or not name or "." in name or name != name.strip():
             raise PlantError(
-                f"{type(self).__name__}: component name must be a non-empty string without '.' or spaces, got {name!r}"
+                f"{type(self).__name__}: component name must be a non-empty string without '.' or "
+                f"spaces, got {name!r}"
             )
         self.name = name
         known = {p.name: p for p in self.PARAMS}
         unknown = sorted(set(params) - set(known))
         if unknown:
             raise PlantError(
-                f"component '{name}' ({type(self).__name__}): unknown parameter(s) {', '.join(unknown)}; "
+                f"component '{name}' ({type(self).__name__}): unknown parameter(s) "
+                f"{', '.join(unknown)}; "
                 f"known: {', '.join(known) or 'none'}"
             )
         self.params: dict[str, object] = {}
@@ -289,8 +295,8 @@ class Component:
             value = params.get(p.name, p.default)
             if value is REQUIRED:
                 raise PlantError(
-                    f"component '{name}' ({type(self).__name__}): parameter '{p.name}' [{p.unit}] is required"
-                    + (f" ({p.doc})" if p.doc else "")
+                    f"component '{name}' ({type(self).__name__}): parameter '{p.name}' [{p.unit}] "
+                    "is required" + (f" ({p.doc})" if p.doc else "")
                 )
             self.params[p.name] = self._validate(p, value)
         self.medium = None  # set by the plant (dnasim.media medium object)
@@ -307,19 +313,22 @@ class Component:
                 )
             if p.choices is not None and value not in p.choices:
                 raise PlantError(
-                    f"component '{self.name}': parameter '{p.name}' = {value!r} is not one of {', '.join(map(repr, p.choices))}"
+                    f"component '{self.name}': parameter '{p.name}' = {value!r} is not one of "
+                    f"{', '.join(map(repr, p.choices))}"
                 )
             return value
         if p.kind == "bool":
             if not isinstance(value, (bool, np.bool_)):
                 raise PlantError(
-                    f"component '{self.name}': parameter '{p.name}' must be true or false, got {value!r}"
+                    f"component '{self.name}': parameter '{p.name}' must be true or false, got "
+                    f"{value!r}"
                 )
             return bool(value)
         if p.kind == "int":
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise PlantError(
-                    f"component '{self.name}': parameter '{p.name}' must be an integer, got {value!r}"
+                    f"component '{self.name}': parameter '{p.name}' must be an integer, got "
+                    f"{value!r}"
                 )
             _check_number(self.name, p, value)
             return int(value)
@@ -328,7 +337,8 @@ class Component:
                 f = as_time_function(value)
             except TypeError:
                 raise PlantError(
-                    f"component '{self.name}': parameter '{p.name}' must be a number [{p.unit}] or a time function, got {value!r}"
+                    f"component '{self.name}': parameter '{p.name}' must be a number [{p.unit}] "
+                    f"or a time function, got {value!r}"
                 ) from None
             for tt in (0.0, *f.breakpoints):
                 _check_number(self.name, p, f(tt))
@@ -409,21 +419,11 @@ class Component:
                 return p
         raise KeyError(name)
 
-    def h_from(self, prefix: str, t: float) -> float:
-        """Enthalpy [J/kg] from a parameter pair ``<prefix>h`` / ``<prefix>T`` at time t.
-
-        The pressure for T -> h is the parameter ``p`` if present, else 1 atm."""
-        h = self.params.get(prefix + "h")
-        if h is not None:
-            return self.param_at(prefix + "h", t)
-        p = self.param_at("p", t) if self.params.get("p") is not None else 101325.0
-        return self.medium.h_pT(p, self.param_at(prefix + "T", t))
-
     @classmethod
     def describe(cls) -> str:
         """A text summary: ports, parameters (units, defaults), equations."""
         lines = [f"{cls.__name__}"]
-        doc = textwrap.dedent(cls.__doc__ or "").strip()
+        doc = inspect.cleandoc(cls.__doc__ or "")
         if doc:
             lines += ["", textwrap.indent(doc, "  ")]
         if cls.FLUID_PORTS:
@@ -451,11 +451,3 @@ class Component:
 
     def __repr__(self):
         return f"{type(self).__name__}({self.name!r})"
-
-
-@dataclass
-class _Layout:
-    """Local variable layout of one component (built by the assembly)."""
-
-    names: list = field(default_factory=list)
-    index: dict = field(default_factory=dict)

@@ -39,7 +39,7 @@ from __future__ import annotations
 import numpy as np
 
 from dnasim.components.base import Equation, Variable
-from dnasim.components.physics import G, friction_dp, lmtd, properties
+from dnasim.components.physics import G, PropertyArrays, friction_dp, lmtd, properties
 
 
 class Channel:
@@ -79,6 +79,7 @@ class Channel:
         P = prefix
         self.m, self.M, self.U, self.Q = P + "m", P + "M", P + "U", P + "Q"
         self.pv, self.hv = P + "p_v", P + "h_v"
+        self._props = PropertyArrays()
 
     # names of the state of volume i and of its upstream state
     def p_name(self, i):
@@ -149,7 +150,7 @@ class Channel:
         pv, hv = self.states(x)
         p = np.concatenate(([x[f"{self.inlet}.p"]], pv))
         h = np.concatenate(([x[f"{self.inlet}.h"]], hv))
-        T, rho, u = properties(medium, p, h)
+        T, rho, u = self._props(medium, p, h)
         return p, h, T, rho, u
 
     def residual_blocks(self, x, xp, props, T_wall):

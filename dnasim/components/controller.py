@@ -24,6 +24,11 @@ class PIController(Component):
     above when it must change (direction -1):
       upper: mode free: z_max - v  -> enter "high";  mode high: v - z_max -> leave to "free"
       lower: mode free: v - z_min  -> enter "low";   mode low:  z_min - v -> leave to "free"
+    With anti_windup the integrator is held while saturated, so v - z_max would
+    chatter (v falls at once with m_p, the free mode then pushes it back): instead
+    the saturated mode is left when the error changes sign (upper: g = sgn(Kp) e,
+    lower: g = -sgn(Kp) e), and m_I is reset to z_max - m_p (z_min - m_p) so the
+    output stays continuous (bumpless transfer).
     Given start: m_I starts at ``integral0``.
     """
 
@@ -104,19 +109,43 @@ class PIController(Component):
         )
 
     # ----------------------------------------------------------------- switches
+    def _gain_sign(self):
+        return 1.0 if (self.params["Kp"] + self.params["KI"]) >= 0 else -1.0
+
     def _upper(self, t, x, xp):
         v = x["m_p"] + x["m_I"]
-        return v - self.params["z_max"] if self.mode == "high" else self.params["z_max"] - v
+        z_max = self.params["z_max"]
+        if self.mode != "high":
+            return z_max - v
+        if self.params["anti_windup"]:
+            # leave when the error turns to drive the output down
+            return self._gain_sign() * x["e"]
+        return v - z_max
 
     def _lower(self, t, x, xp):
         v = x["m_p"] + x["m_I"]
-        return self.params["z_min"] - v if self.mode == "low" else v - self.params["z_min"]
+        z_min = self.params["z_min"]
+        if self.mode != "low":
+            return v - z_min
+        if self.params["anti_windup"]:
+            return -self._gain_sign() * x["e"]
+        return z_min - v
 
     def _toggle_upper(self, t, x, xp):
-        self.mode = "free" if self.mode == "high" else "high"
+        if self.mode == "high":
+            self.mode = "free"
+            if self.params["anti_windup"]:
+                x["m_I"] = self.params["z_max"] - x["m_p"]  # bumpless: v = z_max
+        else:
+            self.mode = "high"
 
     def _toggle_lower(self, t, x, xp):
-        self.mode = "free" if self.mode == "low" else "low"
+        if self.mode == "low":
+            self.mode = "free"
+            if self.params["anti_windup"]:
+                x["m_I"] = self.params["z_min"] - x["m_p"]
+        else:
+            self.mode = "low"
 
     def switches(self):
         return [

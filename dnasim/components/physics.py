@@ -32,6 +32,35 @@ def properties(medium, p, h):
     return T, rho, u
 
 
+class PropertyArrays:
+    """``properties`` for a fixed set of points that remembers its last result.
+
+    Only the points whose (p, h) changed since the previous call are sent to the
+    medium. A finite-difference Jacobian perturbs a few points at a time, so for a
+    long pipe this saves almost all property calls, independently of the size of
+    the medium's own cache.
+    """
+
+    def __init__(self):
+        self.p = None
+        self.h = None
+        self.out = None
+
+    def __call__(self, medium, p, h):
+        p = np.asarray(p, dtype=float)
+        h = np.asarray(h, dtype=float)
+        if self.p is None or self.p.shape != p.shape or self.medium is not medium:
+            self.medium = medium
+            T, rho, u = properties(medium, p, h)
+        else:
+            T, rho, u = (a.copy() for a in self.out)
+            changed = np.flatnonzero((p != self.p) | (h != self.h))
+            if changed.size:
+                T[changed], rho[changed], u[changed] = properties(medium, p[changed], h[changed])
+        self.p, self.h, self.out = p.copy(), h.copy(), (T, rho, u)
+        return T.copy(), rho.copy(), u.copy()
+
+
 def softplus(x, eps):
     """eps * ln(1 + exp(x / eps)) + 1e-9 eps: a smooth, strictly positive max(x, 0).
 

@@ -25,7 +25,7 @@ class Pipe(Component):
       internal_energy[i]  U[i] = M[i] (u_up + u_i)/2   (10.12c, "mean": default for n_volumes = 1)
                           U[i] = M[i] u_i              ("outlet": default for n_volumes > 1,
                                                         since chained "mean" volumes zig-zag)
-      heat[i]             Q[i] = kA_i LMTD(T_up - T_w[i], T_i - T_w[i])  (10.12e, heat_transfer="lmtd")
+      heat[i]             Q[i] = kA_i LMTD(T_up - T_w[i], T_i - T_w[i])  (10.12e, "lmtd")
                           (or kA_i (T_i - T_w[i]) "outlet", kA_i ((T_up + T_i)/2 - T_w[i]) "mean")
       momentum[i]         p_up - p_i = k_i m[i] sqrt(m[i]^2 + m_reg^2)/rho_up + rho_up g dz/n
 
@@ -67,13 +67,25 @@ class Pipe(Component):
             kind="string",
             choices=("mean", "outlet"),
         ),
-        Param("heat_transfer", "1", "lmtd", "temperature difference: log-mean (seed), outlet (upwind) or mean",
-              kind="string", choices=("lmtd", "outlet", "mean")),
+        Param(
+            "heat_transfer",
+            "1",
+            "lmtd",
+            "temperature difference: log-mean (seed), outlet (upwind) or mean",
+            kind="string",
+            choices=("lmtd", "outlet", "mean"),
+        ),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param(
             "m_reg", "kg/s", None, "friction regularisation flow (default 1e-4 m_nominal)", min=0.0
         ),
-        Param("dT_reg", "K", 1.0, "LMTD regularisation width (exact LMTD for differences >~ 10 dT_reg)", min=0.0),
+        Param(
+            "dT_reg",
+            "K",
+            1.0,
+            "LMTD regularisation width (exact LMTD for differences >~ 10 dT_reg)",
+            min=0.0,
+        ),
         Param("p0", "Pa", None, "initial fluid pressure (given start)", min=0.0),
         Param("T0", "K", None, "initial fluid temperature (given start)", min=0.0),
         Param("T_wall0", "K", None, "initial wall temperature (given start), default T0", min=0.0),
@@ -99,7 +111,8 @@ class Pipe(Component):
             raise PlantError(f"component '{self.name}': parameter 'V' must be > 0 m3")
         if P["C_wall"] == 0 and P["T_wall"] is None and P["kA"] > 0:
             raise PlantError(
-                f"component '{self.name}': with kA > 0 give either C_wall > 0 (wall storage) or T_wall (fixed wall)"
+                f"component '{self.name}': with kA > 0 give either C_wall > 0 (wall storage) or "
+                "T_wall (fixed wall)"
             )
         self.n = n
         # "mean" chained over several volumes extrapolates each outlet state from its
