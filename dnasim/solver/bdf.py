@@ -39,6 +39,7 @@ MAX_NEWTON_FAILURES = 10
 MAX_ERROR_FAILURES = 10
 ETA_MAX = 10.0  # largest step growth after a successful step
 ETA_MAX_FIRST = 1.0e4 / 10.0  # growth allowed right after the (tiny) initial step
+ETA_GROW = 1.5  # grow the step only when it can grow by this factor at least (IDA: 2)
 ERROR_TARGET = 0.2  # the step-size formula aims at 0.2 of the tolerance (IDA: 0.5), see README
 ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
 
@@ -391,8 +392,8 @@ class NordsieckBDF:
 
         eta_k = (err_k / ERROR_TARGET)^(-1/(k+1)) for the orders k = q - 1, q, q + 1
         (the lower and higher ones only after q + 1 steps at this h, when the
-        differences they need are at this h). Then, as in IDA: grow only when the
-        step can at least double (at most ETA_MAX), shrink to [0.5, 0.9] when
+        differences they need are at this h). Then, much as IDA: grow only when the
+        step can grow by ETA_GROW at least (at most ETA_MAX), shrink to [0.5, 0.9] when
         eta < 1, and otherwise keep h, so the Nordsieck history is rescaled
         seldom. Never grow right after a failure.
         """
@@ -424,7 +425,7 @@ class NordsieckBDF:
                     new_q, eta = q + 1, eta_up
         if failed_this_step:
             eta = min(eta, 1.0)
-        if eta >= 2.0:
+        if eta >= ETA_GROW:
             eta = min(eta, ETA_MAX)
         elif eta < 1.0:
             eta = min(max(eta, 0.5), 0.9)
