@@ -110,7 +110,7 @@ def run(n, solver, rtol=1e-6, linsolver=None):
                 dense_output=False,
             )
         else:
-            from dnasim.ida_reference import solve_with_ida
+            from dnasim.testing.ida_plant import solve_with_ida
 
             res = solve_with_ida(
                 dae,

@@ -376,7 +376,7 @@ class Plant:
                 if res is None:
                     raise
         elif solver == "ida":
-            from dnasim.ida_reference import solve_with_ida
+            from dnasim.testing.ida_plant import solve_with_ida
 
             res = solve_with_ida(dae, (t0, t_end), y0, yp0, **kwargs)
         else:

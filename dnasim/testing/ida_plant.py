@@ -1,6 +1,7 @@
-"""Integrate an assembled plant with SUNDIALS IDA (scikit-sundae), for cross-checks
-and benchmarks. Not used by ``dnasim.solve_dae``; needs the optional dependency
-``scikit-sundae``.
+"""Integrate an assembled plant with SUNDIALS IDA (scikit-sundae), for cross-checks and
+benchmarks. Not used by ``dnasim.solve_dae``; needs the optional dependency
+``scikit-sundae``. (``dnasim.testing.ida`` runs a bare residual through IDA in one
+call; this driver adds what a plant needs: time events, switches and restarts.)
 
 The driver mirrors the plant semantics: it stops exactly at every tstop and
 re-initialises there (consistent y' and algebraic y by ``dnasim.initialization``,
