@@ -399,11 +399,27 @@ def _long_plant(tmp_path):
     return plant
 
 
+def _default_signals():
+    """In the child: SIGINT handled as usual, nothing blocked.
+
+    A shell starts `command &` with SIGINT ignored, and an ignored signal stays
+    ignored across exec; Python then installs no KeyboardInterrupt handler. The
+    test must not depend on how the test run itself was started.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_SETMASK, [])
+
+
 def _start(plant, out):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     cmd = [sys.executable, "-c", "from dnasim.cli import main; main()", "run", str(plant)]
     return subprocess.Popen(
-        cmd + ["-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
+        cmd + ["-o", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+        preexec_fn=_default_signals,
     )
 
 
