@@ -90,50 +90,22 @@ def test_robertson_against_ida_and_the_conservation_law():
 
     t_out = np.array([0.4, 40.0, 4e2, 4e4, 4e6, 4e8, 4e10])
     atol = np.array([1e-8, 1e-14, 1e-8])
-    ours = solve_dae(
-        robertson,
-        (0, 4e10),
-        ROBERTSON_Y0,
-        ROBERTSON_YP0,
-        algebraic=[2],
-        rtol=1e-6,
-        atol=atol,
-        t_eval=t_out,
-    )
-    ref = solve_with_ida(
-        robertson,
-        (0, 4e10),
-        ROBERTSON_Y0,
-        ROBERTSON_YP0,
-        algebraic=[2],
-        rtol=1e-11,
-        atol=atol * 1e-5,
-        t_eval=t_out,
-    )
+    args = (robertson, (0, 4e10), ROBERTSON_Y0, ROBERTSON_YP0)
+    ours = solve_dae(*args, algebraic=[2], rtol=1e-6, atol=atol, t_eval=t_out)
+    ref = solve_with_ida(*args, algebraic=[2], rtol=1e-11, atol=atol * 1e-5, t_eval=t_out)
     assert ours.success and ref.success
     ref_y = ref.y[:, 1:]
     # The tolerances promise a local error below rtol |y| + atol per step; over some 1000
     # steps the global error grows to a few tens of that (IDA at the same tolerances
     # shows 3 on this problem). Measured in those units, dnasim must stay below 10.
-    ida = solve_with_ida(
-        robertson,
-        (0, 4e10),
-        ROBERTSON_Y0,
-        ROBERTSON_YP0,
-        algebraic=[2],
-        rtol=1e-6,
-        atol=atol,
-        t_eval=t_out,
-    )
+    ida = solve_with_ida(*args, algebraic=[2], rtol=1e-6, atol=atol, t_eval=t_out)
     scale = 1e-6 * np.abs(ref_y) + atol[:, None]
     ours_err = np.max(np.abs(ours.y - ref_y) / scale)
     ida_err = np.max(np.abs(ida.y[:, 1:] - ref_y) / scale)
     assert ours_err < 10, (ours_err, ida_err)
     # Mass conservation y1 + y2 + y3 = 1 is the algebraic equation: it holds to the
     # Newton tolerance, 0.33 * (rtol * 1 + atol) ~ 3e-7, in practice far better (IDA: ~4e-9).
-    every_step = solve_dae(
-        robertson, (0, 4e10), ROBERTSON_Y0, ROBERTSON_YP0, algebraic=[2], rtol=1e-6, atol=atol
-    )
+    every_step = solve_dae(*args, algebraic=[2], rtol=1e-6, atol=atol)
     assert np.max(np.abs(every_step.y.sum(axis=0) - 1.0)) < 1e-8
 
 

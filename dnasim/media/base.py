@@ -178,6 +178,22 @@ class Medium(ABC):
         cache[key] = st
         return st
 
+    def _refuse_saturated(self, p: float, T: float, T_sat: float) -> None:
+        """Raise PropertyError when T is (within 1e-6 K) the saturation temperature of p.
+
+        There h is not fixed by (p, T): any point of the two-phase dome has it.
+        """
+        if abs(T - T_sat) <= 1e-6:
+            raise PropertyError(
+                self.label,
+                p,
+                math.nan,
+                "h_pT",
+                f"T is the saturation temperature {T_sat:.9g} K of p: h is not fixed "
+                "by (p, T) inside the two-phase dome; use h_pQ",
+                T=T,
+            )
+
     @abstractmethod
     def _compute_state(self, p: float, h: float) -> FluidState:
         """Compute the state at checked ``p`` > 0 [Pa] and finite ``h`` [J/kg].

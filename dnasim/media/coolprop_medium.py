@@ -103,16 +103,7 @@ class CoolPropMedium(Medium):
                 Tsat = AS.T()
             except BACKEND_ERRORS:
                 Tsat = math.nan
-            if abs(T - Tsat) <= 1e-6:
-                raise PropertyError(
-                    self.label,
-                    p,
-                    math.nan,
-                    "h_pT",
-                    f"T is the saturation temperature {Tsat:.9g} K of p: h is not fixed "
-                    "by (p, T) inside the two-phase dome; use h_pQ",
-                    T=T,
-                )
+            self._refuse_saturated(p, T, Tsat)
         AS.update(_PT, p, T)
         return AS.hmass()
 

@@ -313,16 +313,7 @@ class IF97Water(Medium):
         if P_SAT_MIN <= p < P_CRIT:
             AS.update(_PQ, p, 0.0)
             Tsat = AS.T()
-            if abs(T - Tsat) <= 1e-6:
-                raise PropertyError(
-                    self.label,
-                    p,
-                    math.nan,
-                    "h_pT",
-                    f"T is the saturation temperature {Tsat:.9g} K of p: h is not fixed "
-                    "by (p, T) inside the two-phase dome; use h_pQ",
-                    T=T,
-                )
+            self._refuse_saturated(p, T, Tsat)
         AS.update(_PT, p, T)
         return AS.hmass()
 
