@@ -126,12 +126,8 @@ class IF97Water(Medium):
     def saturation_enthalpies(self, p):
         """(h', h'') [J/kg] at p [Pa] (arrays of the shape of p); NaN outside [611.213 Pa, p_c)."""
         p = np.asarray(p, dtype=float)
-        if self.kernel == "numba" and p.size <= 8:
-            hl = np.empty(p.shape)
-            hv = np.empty(p.shape)
-            for i, pi in enumerate(p.flat):
-                hl.flat[i], hv.flat[i] = NB.saturation_scalar(pi)
-            return hl, hv
+        if self.kernel == "numba":
+            return NB.saturation_arrays(p)
         hl, hv = K.saturation_enthalpies(p)
         return hl.reshape(p.shape), hv.reshape(p.shape)
 

@@ -21,7 +21,7 @@ repeated multiplication instead of exp/log per term, and a single-phase state be
 the numpy kernel to about 1e-12 (tests/test_if97_kernel.py).
 
 Entry points: :func:`ph_arrays` (fills arrays, like ``if97_kernel.ph``),
-:func:`ph_scalar` (one state, a tuple), :func:`h_pT_scalar`.
+:func:`ph_scalar` (one state, a tuple), :func:`h_pT_scalar`, :func:`saturation_arrays`.
 """
 
 from __future__ import annotations
@@ -708,3 +708,19 @@ def saturation_scalar(p):
         return math.nan, math.nan
     _, _, recL, recV, _ = _sat_records(p)
     return recL[1], recV[1]
+
+
+@_njit
+def _sat_loop(p, hl, hv):
+    for i in range(p.size):
+        hl[i], hv[i] = saturation_scalar(p[i])
+
+
+def saturation_arrays(p):
+    """(h', h'') [J/kg] arrays of the shape of p [Pa]; NaN outside [P_MIN, p_c)."""
+    p = np.asarray(p, dtype=float)
+    pf = np.ascontiguousarray(p.ravel())
+    hl = np.empty(pf.size)
+    hv = np.empty(pf.size)
+    _sat_loop(pf, hl, hv)
+    return hl.reshape(p.shape), hv.reshape(p.shape)
