@@ -221,16 +221,18 @@ class StreamingCSV:
         with _SignalsBlocked():
             self._write_all(_csv_line(self.header))
 
-    def _error(self, why: str):
+    def _error(self, why: str, reached: float | None = None):
         from dnasim.errors import OutputError
 
         if self.last_time is None:
-            where = "before the first row was written"
+            where = "before the first row"
         else:
             where = (
-                f"after {self.rows_written} whole rows, up to simulated time t = "
+                f"after {self.rows_written} whole rows, at simulated time t = "
                 f"{self.last_time:.6g} s"
             )
+        if reached is not None and reached != self.last_time:
+            where += f" (the simulation had reached t = {reached:.6g} s)"
         return OutputError(
             f"cannot write {self.path}: {why}; the file stops {where}",
             path=self.path,
@@ -247,6 +249,7 @@ class StreamingCSV:
                 n = os.write(self._fd, view)
                 view = view[n:]
         except OSError as exc:
+            reached = self._pending[-1][0] if self._pending else None
             try:
                 os.ftruncate(self._fd, self._size)
                 os.lseek(self._fd, self._size, os.SEEK_SET)
@@ -258,7 +261,7 @@ class StreamingCSV:
                 os.close(fd)
             except OSError:
                 pass
-            raise self._error(_oserror_text(exc)) from None
+            raise self._error(_oserror_text(exc), reached) from None
         self._size += len(data)
 
     @property

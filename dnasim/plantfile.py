@@ -149,9 +149,9 @@ class SimulationSettings:
         if n is not None and not n <= limit:
             raise PlantError(
                 f"[simulation] output_interval = {self.output_interval:g} s from "
-                f"{self.t_start:g} s to t_end = {self.t_end:g} s gives "
-                + limit_message("the number of output points", n, limit)
-                + "; choose a longer output_interval or a shorter t_end"
+                f"{self.t_start:g} s to t_end = {self.t_end:g} s asks for {n:g} output "
+                f"points, above the limit of {limit:g}; choose a longer output_interval or "
+                "a shorter t_end"
             )
 
     def t_eval(self):
