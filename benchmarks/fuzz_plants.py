@@ -91,7 +91,9 @@ def _new_value(old, rnd: random.Random):
         number = old.split()[0] if old.split() else "1"
         return f"{number} {rnd.choice(UNITS)}".strip()
     if kind == 2:  # an extreme number with a plausible unit
-        return f"{rnd.choice(['1e30', '-5', '0', '1e-300', '5000', '1e6', '1e9'])} {rnd.choice(UNITS)}"
+        return (
+            f"{rnd.choice(['1e30', '-5', '0', '1e-300', '5000', '1e6', '1e9'])} {rnd.choice(UNITS)}"
+        )
     if kind == 3:  # a dangling name
         return rnd.choice(["nowhere", "sensr.T", "pi.zz", "n_1", "pipe.inlet", "x.y.z", "."])
     return rnd.choice(WRONG)
@@ -237,7 +239,9 @@ def main(argv=None) -> int:
     pending = list(chunks)
     while pending:
         with ProcessPoolExecutor(args.jobs) as pool:
-            futures = [(c, pool.submit(_chunk, (c, args.run_fraction, args.timeout))) for c in pending]
+            futures = [
+                (c, pool.submit(_chunk, (c, args.run_fraction, args.timeout))) for c in pending
+            ]
             pending = []
             for c, fut in futures:
                 try:

@@ -466,6 +466,11 @@ def read_plant_file(path: str | Path) -> tuple[dict, str]:
 def _decode(text: str, path: str) -> dict:
     try:
         return tomllib.loads(text)
+    except RecursionError:
+        raise PlantError(
+            f"{path}: malformed plant file: arrays or tables nested too deeply (a plant file "
+            "needs at most a few levels)"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         msg = str(exc)
         m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
@@ -1178,7 +1183,17 @@ def _param_value(value, p, errors, table, key, signal_units=(), cls=None):
     return x
 
 
-def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
+def _network(specs: list[ComponentSpec], errors: _Errors, broken: dict | None = None) -> None:
+    """Nodes with one port, signals from unknown components or outputs, signal
+    dimensions. ``broken``: raw tables of components already reported as invalid;
+    what follows only from their absence (their nodes, their outputs) is not
+    reported again."""
+    broken = broken or {}
+    broken_nodes = set()
+    for table in broken.values():
+        ports = table.get("ports") if isinstance(table, dict) else None
+        if isinstance(ports, dict):
+            broken_nodes.update(n for n in ports.values() if isinstance(n, str))
     by_name = {c.name: c for c in specs}
     node_members: dict[str, list[tuple[str, str]]] = {}
     for c in specs:
@@ -1193,7 +1208,7 @@ def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
                 f"name used twice: '{node}' is both a component and a node; "
                 "give the node another name",
             )
-        if len(members) == 1:
+        if len(members) == 1 and node not in broken_nodes:
             c, port = members[0]
             errors.add(
                 ("components", c, "ports"),
@@ -1207,7 +1222,8 @@ def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
             comp, out = src.split(".")
             other = by_name.get(comp)
             if other is None:
-                errors.add(sub, inp, f"no component named '{comp}'{_suggest(comp, by_name)}")
+                if comp not in broken:
+                    errors.add(sub, inp, f"no component named '{comp}'{_suggest(comp, by_name)}")
                 continue
             outs = other.signal_outputs
             if out in outs:
@@ -1323,11 +1339,14 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
             )
             errors.raise_if_any()
         sig_units = _signal_units(comps, registry)
+        broken = {}
         for cname, ctable in comps.items():
             spec = _component(cname, ctable, registry, errors, tuple(sig_units.get(cname, ())))
             if spec is not None:
                 specs.append(spec)
-        _network(specs, errors)
+            else:
+                broken[cname] = ctable
+        _network(specs, errors, broken)
         cells = sum(
             v
             for c in specs
