@@ -13,6 +13,7 @@ Usable from Python too::
 
 from __future__ import annotations
 
+import inspect
 import math
 import time
 from dataclasses import dataclass, field
@@ -153,6 +154,10 @@ def solve_streaming(plant, sim, callback, *, dense_output: bool = False):
     """Integrate ``plant`` with the settings ``sim`` and hand every output point to
     ``callback(t, y, yp)``; returns the solver's ``DAEResult``.
 
+    ``dense_output=True`` (``run_plant(keep_rows=True)``) keeps the rows and the
+    dense output in the result; otherwise a solver that has ``keep_output`` is
+    asked not to keep the rows at all.
+
     The same DAE, start and tolerances as ``Plant.simulate``, but for streaming:
     no dense output (the Nordsieck pieces of every step), no ``PlantResults``
     table, and ``sim.max_steps`` reaches ``solve_dae``. ``sim.t_eval()`` checks the
@@ -167,6 +172,9 @@ def solve_streaming(plant, sim, callback, *, dense_output: bool = False):
     kwargs = {}
     if getattr(sim, "max_steps", None) is not None:
         kwargs["max_steps"] = int(sim.max_steps)
+    if not dense_output and "keep_output" in inspect.signature(solve_dae).parameters:
+        # a solver that can hand rows to the callback only: nothing grows with the rows
+        kwargs["keep_output"] = False
     return solve_dae(
         dae.residual,
         (t0, t_end),
