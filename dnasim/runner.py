@@ -313,6 +313,10 @@ def run_plant(
     if (step_history is None or len(step_history) == 0) and status != "finished":
         # the solver handed nothing over (an interrupt before it could)
         step_history = state["steps"]
+    elif rows_are_steps and status != "finished" and state["last_t"] is not None:
+        # an interrupt inside the callback: the step is accepted but its row is not
+        # on disk; steps.csv and results.csv end at the same step
+        step_history = [r for r in step_history if r[0] <= state["last_t"]]
     if not keep_rows and result is not None and hasattr(result, "y"):
         result.y = result.yp = None  # the rows are in results.csv
     files = []
