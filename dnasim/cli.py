@@ -549,8 +549,15 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file):
         )
     from dnasim.output import plot_steps, plot_variables
 
+    from dnasim.errors import OutputError
+
     target = Path(out_file) if out_file else path.with_name("plot_variables.png")
-    plot_variables(data["time"], data, chosen, units, target, title=str(path))
+    try:
+        plot_variables(data["time"], data, chosen, units, target, title=str(path))
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
+    except ValueError as exc:  # e.g. an image format matplotlib does not know
+        raise InputError(f"option --output: cannot write {target}: {exc}") from None
     click.echo(f"wrote {target}")
     steps = path.with_name("steps.csv")
     if steps.exists() and out_file is None:
@@ -566,7 +573,10 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file):
             rows = []
         if rows:
             target2 = path.with_name("plot_steps.png")
-            plot_steps(rows, target2, title=str(steps))
+            try:
+                plot_steps(rows, target2, title=str(steps))
+            except OutputError as exc:
+                raise InputError(str(exc)) from None
             click.echo(f"wrote {target2}")
 
 

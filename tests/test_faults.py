@@ -62,17 +62,18 @@ def test_previous_results_are_removed_before_a_run_that_fails(tmp_path):
     assert sorted(os.listdir(out)) == []
 
 
-def test_previous_results_are_removed_when_the_run_is_stopped_before_its_first_row(tmp_path):
+def test_previous_results_are_removed_when_the_run_fails_before_its_first_row(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "results.csv").write_text("time [s]\n1.0\n")
-    # a steady start that cannot be found: fails before the first output point
-    text = AIR.replace('start = "given"', 'start = "steady"').replace('p = "1 bar"', 'p = "3 bar"')
+    (out / "steps.csv").write_text("time,step_size,order\n1.0,1.0,1\n")
+    # a valid file whose start cannot be computed: the run fails while starting
+    text = AIR.replace('p = "1.5 bar"', "p = 1e30")
     res = invoke("run", plant(tmp_path, text), "-o", out, "-q", "--t-end", "1 s")
-    assert res.exit_code in (0, 1, 2)
-    if (out / "results.csv").exists():  # whatever is there belongs to this run
-        names, _, data = read_results_csv(out / "results.csv")
-        assert len(names) > 1
+    assert res.exit_code in (1, 2) and "internal error" not in res.output
+    assert not (out / "results.csv").exists()
+    steps = (out / "steps.csv").read_text() if (out / "steps.csv").exists() else ""
+    assert "1.0,1.0,1" not in steps
 
 
 def test_symlinks_planted_in_the_output_directory_are_not_followed(tmp_path):
@@ -397,3 +398,39 @@ def test_an_unknown_component_type_hides_its_follow_on_errors(tmp_path):
     res = invoke("check", plant(tmp_path, ATT.replace('"Attemperator"', '"Attemperatr"')))
     assert_located(res, "unknown component type 'Attemperatr'", "did you mean 'Attemperator'")
     assert res.output.count(".toml,") == 1, res.output
+
+
+def test_small_tables_on_a_full_disk_leave_no_partial_file(tmp_path, monkeypatch):
+    """events.csv/steps.csv go through a temporary file: ENOSPC while writing it leaves
+    neither a torn table nor the temporary file, and names the table."""
+    import dnasim.output as output
+    from dnasim.output import write_steps_csv
+
+    class Full:
+        def __init__(self, f):
+            self.f = f
+
+        def write(self, data):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def __getattr__(self, name):
+            return getattr(self.f, name)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.f.close()
+
+    real_fdopen = os.fdopen
+    monkeypatch.setattr(output.os, "fdopen", lambda fd, mode: Full(real_fdopen(fd, mode)))
+    with pytest.raises(OutputError, match=r"steps\.csv: the disk is full"):
+        write_steps_csv(tmp_path / "steps.csv", [(1.0, 0.1, 2)])
+    assert os.listdir(tmp_path) == []
+
+
+def test_plot_into_a_missing_directory_is_bad_input(tmp_path):
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", tmp_path / "o", "-q", "--t-end", "5 s")
+    assert res.exit_code == 0
+    res = invoke("plot", tmp_path / "o" / "results.csv", "-o", tmp_path / "nowhere" / "x.png")
+    assert_located(res, "x.png")
