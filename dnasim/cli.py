@@ -547,9 +547,8 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file):
             + ", ".join(variables[:20])
             + (" ..." if len(variables) > 20 else "")
         )
-    from dnasim.output import plot_steps, plot_variables
-
     from dnasim.errors import OutputError
+    from dnasim.output import plot_steps, plot_variables
 
     target = Path(out_file) if out_file else path.with_name("plot_variables.png")
     try:
