@@ -157,7 +157,8 @@ def _coolprop_cache(directory: str | None) -> None:
         raise InputError(f"option --coolprop-cache: {path} is not writable")
     import CoolProp.CoolProp as CP
 
-    CP.set_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY, str(path.resolve()))
+    # CoolProp appends its subdirectory to this string as it is: end with a separator
+    CP.set_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY, os.path.join(path.resolve(), ""))
 
 
 def _tabular_notice(medium: str) -> None:

@@ -383,8 +383,8 @@ def test_tabular_medium_is_announced_before_its_tables_are_built(tmp_path, monke
         res = invoke("check", plant(tmp_path, text), "--coolprop-cache", tmp_path / "cp")
         assert "BICUBIC&HEOS::Water" in res.output and "tables" in res.output
         assert str((tmp_path / "cp").resolve()) in res.output
-        assert CP.get_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY) == str(
-            (tmp_path / "cp").resolve()
+        assert CP.get_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY) == os.path.join(
+            (tmp_path / "cp").resolve(), ""
         )
         kinds = [k for k, name in order if "BICUBIC" in name.upper()]
         assert kinds[:2] == ["notice", "build"]
@@ -434,3 +434,22 @@ def test_plot_into_a_missing_directory_is_bad_input(tmp_path):
     assert res.exit_code == 0
     res = invoke("plot", tmp_path / "o" / "results.csv", "-o", tmp_path / "nowhere" / "x.png")
     assert_located(res, "x.png")
+
+
+@pytest.mark.skipif(
+    not os.environ.get("DNASIM_TABULAR_TESTS"),
+    reason="building CoolProp tables takes 15-30 s; set DNASIM_TABULAR_TESTS=1",
+)
+def test_coolprop_tables_go_to_the_cache_directory(tmp_path):
+    text = ATT.replace('medium = "Water"', 'medium = "BICUBIC&HEOS::Water"')
+    cache = tmp_path / "cp"
+    proc = subprocess.run(
+        [*DNASIM, "check", str(plant(tmp_path, text)), "--coolprop-cache", str(cache)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "note:" in proc.stderr and str(cache.resolve()) in proc.stderr
+    assert any(p.name.endswith(".bin.z") for p in cache.rglob("*"))
