@@ -67,6 +67,9 @@ def _load(plant_file: str):
     except click.ClickException:
         raise
     except Exception as exc:  # a bug, but never a traceback for the user
+        located = _located(exc, plant_file)
+        if located is not None:
+            raise InputError(located) from None
         raise _internal(exc, EXIT_INPUT) from None
 
 
@@ -115,12 +118,90 @@ def main():
 # --------------------------------------------------------------------------- run
 
 
-class _Terminate(BaseException):
-    """Raised from the SIGTERM handler so the run stops like on Ctrl-C."""
+class _Terminate(KeyboardInterrupt):
+    """Raised from the SIGTERM handler so the run stops like on Ctrl-C (the solver
+    then hands over what it computed, as for KeyboardInterrupt)."""
 
 
 def _on_sigterm(signum, frame):
     raise _Terminate()
+
+
+def _catch_sigterm():
+    """Turn SIGTERM into ``_Terminate`` from now on; returns the old handler
+    (None when not in the main thread, e.g. inside a test runner thread)."""
+    try:
+        return signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:
+        return None
+
+
+def _coolprop_cache(directory: str | None) -> None:
+    """Where CoolProp keeps its BICUBIC/TTSE tables (CoolProp's configuration key
+    ALTERNATIVE_TABLES_DIRECTORY); ``--coolprop-cache`` or $DNASIM_COOLPROP_CACHE,
+    else CoolProp's default $HOME/.CoolProp."""
+    directory = directory or os.environ.get("DNASIM_COOLPROP_CACHE") or None
+    from dnasim import plantfile
+
+    plantfile.TABULAR_NOTICE = _tabular_notice
+    if directory is None:
+        return
+    path = Path(directory)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(
+            f"option --coolprop-cache: cannot create {path}: {exc.strerror or exc}"
+        ) from None
+    if not os.access(path, os.W_OK):
+        raise InputError(f"option --coolprop-cache: {path} is not writable")
+    import CoolProp.CoolProp as CP
+
+    # CoolProp appends its subdirectory to this string as it is: end with a separator
+    CP.set_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY, os.path.join(path.resolve(), ""))
+
+
+def _tabular_notice(medium: str) -> None:
+    import CoolProp.CoolProp as CP
+
+    where = CP.get_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY) or str(Path.home() / ".CoolProp")
+    click.echo(
+        f"dnasim: note: medium {medium!r} uses CoolProp property tables: the first use "
+        f"builds them (about 15 MB, 15 s or more) and stores them under {where} "
+        "(choose the place with --coolprop-cache DIR or DNASIM_COOLPROP_CACHE)",
+        err=True,
+    )
+
+
+def _prepare_output(out: Path) -> None:
+    """Create the output directory and remove the previous run's results in it, before
+    anything of the new run can fail."""
+    from dnasim.errors import OutputError
+    from dnasim.output import clear_results
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise InputError(f"the output directory {out} exists and is not a directory") from None
+    except OSError as exc:
+        raise InputError(
+            f"cannot create the output directory {out}: {exc.strerror or exc}"
+        ) from None
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise InputError(f"the output directory {out} is not writable")
+    try:
+        clear_results(out)
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
+
+
+_COOLPROP_CACHE_OPTION = click.option(
+    "--coolprop-cache",
+    default=None,
+    metavar="DIR",
+    help="Directory for CoolProp's BICUBIC/TTSE property tables "
+    "[default: $DNASIM_COOLPROP_CACHE, else ~/.CoolProp].",
+)
 
 
 @main.command(context_settings=CONTEXT_SETTINGS)
@@ -132,12 +213,19 @@ def _on_sigterm(signum, frame):
     default=None,
     metavar="DIR",
     help="Directory for results.csv, events.csv, steps.csv and plots "
-    "[default: results/<plant file name>].",
+    "[default: results/<plant file name>]. The previous run's files there are removed first.",
 )
 @click.option("--t-end", default=None, metavar="T", help='End time, e.g. 900 or "15 min".')
 @click.option("--rtol", type=float, default=None, metavar="R", help="Relative tolerance.")
 @click.option("--atol", type=float, default=None, metavar="A", help="Absolute tolerance.")
 @click.option("--max-order", type=click.IntRange(1, 5), default=None, help="Maximum BDF order.")
+@click.option(
+    "--max-steps",
+    type=int,
+    default=None,
+    metavar="N",
+    help="Most accepted steps before the run stops [default: [simulation] max_steps, else 500000].",
+)
 @click.option(
     "--output-interval", default=None, metavar="DT", help='Time between CSV rows, e.g. "1 s".'
 )
@@ -150,6 +238,7 @@ def _on_sigterm(signum, frame):
     help="Variables to plot (implies --plot): names or shell patterns (pipe1.*, *.T_out); "
     "repeat the option or separate with commas. Default: temperatures and controller outputs.",
 )
+@_COOLPROP_CACHE_OPTION
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
 def run(
     plant_file,
@@ -158,9 +247,11 @@ def run(
     rtol,
     atol,
     max_order,
+    max_steps,
     output_interval,
     plot,
     var_patterns,
+    coolprop_cache,
     quiet,
 ):
     """Simulate PLANT.toml and write results.csv, events.csv, steps.csv (and plots) to DIR.
@@ -168,6 +259,52 @@ def run(
     results.csv is written while the integration runs and flushed periodically: a
     failure or Ctrl-C leaves a valid CSV up to the time reached.
     """
+    old = _catch_sigterm()  # first: a SIGTERM while starting up is reported too
+    out = Path(out_dir) if out_dir else Path("results") / Path(plant_file).stem
+    try:
+        _run(
+            plant_file,
+            out,
+            t_end,
+            rtol,
+            atol,
+            max_order,
+            max_steps,
+            output_interval,
+            plot,
+            var_patterns,
+            coolprop_cache,
+            quiet,
+        )
+    except (KeyboardInterrupt, _Terminate) as exc:  # outside the integration itself
+        what = "SIGTERM" if isinstance(exc, _Terminate) else "Ctrl-C"
+        raise SimulationFailed(
+            f"interrupted ({what}) while starting or finishing the run; no results were "
+            f"computed beyond what {out / 'results.csv'} holds (if it exists)"
+        ) from None
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+
+
+def _run(
+    plant_file,
+    out,
+    t_end,
+    rtol,
+    atol,
+    max_order,
+    max_steps,
+    output_interval,
+    plot,
+    var_patterns,
+    coolprop_cache,
+    quiet,
+):
+    import math
+
+    _prepare_output(out)
+    _coolprop_cache(coolprop_cache)
     loaded = _load(plant_file)
     sim = loaded.simulation
     x = _parse_option_quantity(t_end, "s", "--t-end")
@@ -180,35 +317,38 @@ def run(
             raise InputError(f"option --rtol: must be > 0 and < 1 (got {rtol})")
         sim.rtol = rtol
     if atol is not None:
-        if not atol > 0:
-            raise InputError(f"option --atol: must be > 0 (got {atol})")
+        if not (atol > 0 and math.isfinite(atol)):
+            raise InputError(f"option --atol: must be a finite number > 0 (got {atol})")
         sim.atol = atol
     if max_order is not None:
         sim.max_order = max_order
+    if max_steps is not None:
+        from dnasim.plantfile import LIMITS, limit_message
+
+        if max_steps < 1:
+            raise InputError(f"option --max-steps: must be at least 1 (got {max_steps})")
+        if max_steps > LIMITS["max_steps"]:
+            raise InputError(
+                "option --max-steps: "
+                + limit_message("--max-steps", max_steps, LIMITS["max_steps"])
+            )
+        sim.max_steps = max_steps
     dt = _parse_option_quantity(output_interval, "s", "--output-interval")
     if dt is not None:
         sim.output_interval = dt
+    from dnasim.errors import DnasimError, OutputError, PlantError
+
+    try:
+        sim.check_output_points()
+    except PlantError as exc:
+        src = "options --output-interval/--t-end" if (dt or x) else plant_file
+        raise InputError(f"{src}: {exc}") from None
     patterns = _split_patterns(var_patterns)
     plot = plot or bool(patterns)
-
-    out = Path(out_dir) if out_dir else Path("results") / Path(plant_file).stem
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(
-            f"cannot create the output directory {out}: {exc.strerror or exc}"
-        ) from None
-    if not os.access(out, os.W_OK):
-        raise InputError(f"the output directory {out} is not writable")
 
     from dnasim.runner import RunOutcome, run_plant
 
     show_progress = not quiet and sys.stdout.isatty()
-    old = signal.getsignal(signal.SIGTERM)
-    try:
-        signal.signal(signal.SIGTERM, _on_sigterm)
-    except ValueError:  # not the main thread (e.g. inside a test runner thread)
-        old = None
     try:
         outcome: RunOutcome = run_plant(
             loaded,
@@ -218,22 +358,21 @@ def run(
         )
     except click.ClickException:
         raise
-    except (KeyboardInterrupt, _Terminate):  # outside the integration itself
-        raise SimulationFailed(
-            f"interrupted while starting or finishing the run; {out / 'results.csv'} holds "
-            "whatever rows were computed"
-        ) from None
+    except (KeyboardInterrupt, _Terminate):
+        raise
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
+    except PlantError as exc:
+        raise InputError(f"{plant_file}: {exc}") from None
+    except DnasimError as exc:
+        raise InputError(f"{plant_file}: the plant cannot be simulated: {exc}") from None
     except Exception as exc:
-        from dnasim.errors import PlantError
-
-        if isinstance(exc, PlantError):
-            raise InputError(f"{plant_file}: {exc}") from None
+        located = _located(exc, plant_file)
+        if located is not None:
+            raise InputError(located) from None
         raise _internal(exc, EXIT_SIMULATION) from None
-    finally:
-        if old is not None:
-            signal.signal(signal.SIGTERM, old)
 
-    if plot and outcome.t_reached is not None:
+    if plot and outcome.t_reached is not None and outcome.status != "output-error":
         from dnasim.runner import write_plots
 
         try:
@@ -246,8 +385,22 @@ def run(
                 click.echo(f"wrote {f}")
     if not quiet or not outcome.success:
         click.echo(outcome.summary())
+    if outcome.status == "output-error":
+        raise InputError(outcome.failure_message())
     if not outcome.success:
         raise SimulationFailed(outcome.failure_message())
+
+
+def _located(exc: BaseException, plant_file: str) -> str | None:
+    """An environment or input problem that is not a bug, as a one-line message."""
+    if isinstance(exc, MemoryError):
+        return (
+            f"{plant_file}: out of memory while building or simulating the plant; reduce "
+            "n_volumes/n_sections, the number of components or the output points"
+        )
+    if isinstance(exc, RecursionError):
+        return f"{plant_file}: the plant is nested too deeply to be read"
+    return None
 
 
 # --------------------------------------------------------------------------- check
@@ -255,11 +408,25 @@ def run(
 
 @main.command(context_settings=CONTEXT_SETTINGS)
 @click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
-def check(plant_file):
+@_COOLPROP_CACHE_OPTION
+def check(plant_file, coolprop_cache):
     """Validate PLANT.toml and analyse its structure (equations, unknowns, states,
     matching) without simulating. Exits 2 on any problem."""
+    old = _catch_sigterm()
+    try:
+        _check(plant_file, coolprop_cache)
+    except (KeyboardInterrupt, _Terminate) as exc:
+        what = "SIGTERM" if isinstance(exc, _Terminate) else "Ctrl-C"
+        raise SimulationFailed(f"{plant_file}: check interrupted ({what})") from None
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+
+
+def _check(plant_file, coolprop_cache):
     from dnasim.errors import DnasimError, PlantError
 
+    _coolprop_cache(coolprop_cache)
     loaded = _load(plant_file)
     try:
         report = loaded.plant.check()
@@ -268,6 +435,9 @@ def check(plant_file):
     except DnasimError as exc:
         raise InputError(f"{plant_file}: structural analysis failed: {exc}") from None
     except Exception as exc:
+        located = _located(exc, plant_file)
+        if located is not None:
+            raise InputError(located) from None
         raise _internal(exc, EXIT_INPUT) from None
     from dnasim.runner import describe_report
 
@@ -285,6 +455,9 @@ def check(plant_file):
             text += f"\nerror: the plant cannot be assembled: {exc}"
             ok = False
         except Exception as exc:
+            located = _located(exc, plant_file)
+            if located is not None:
+                raise InputError(located) from None
             raise _internal(exc, EXIT_INPUT) from None
     click.echo(
         f"{plant_file}: plant '{loaded.spec.name}', {len(loaded.spec.components)} components"
@@ -375,10 +548,16 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file):
             + ", ".join(variables[:20])
             + (" ..." if len(variables) > 20 else "")
         )
+    from dnasim.errors import OutputError
     from dnasim.output import plot_steps, plot_variables
 
     target = Path(out_file) if out_file else path.with_name("plot_variables.png")
-    plot_variables(data["time"], data, chosen, units, target, title=str(path))
+    try:
+        plot_variables(data["time"], data, chosen, units, target, title=str(path))
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
+    except ValueError as exc:  # e.g. an image format matplotlib does not know
+        raise InputError(f"option --output: cannot write {target}: {exc}") from None
     click.echo(f"wrote {target}")
     steps = path.with_name("steps.csv")
     if steps.exists() and out_file is None:
@@ -394,7 +573,10 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file):
             rows = []
         if rows:
             target2 = path.with_name("plot_steps.png")
-            plot_steps(rows, target2, title=str(steps))
+            try:
+                plot_steps(rows, target2, title=str(steps))
+            except OutputError as exc:
+                raise InputError(str(exc)) from None
             click.echo(f"wrote {target2}")
 
 

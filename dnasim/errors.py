@@ -26,3 +26,19 @@ class ResidualDomainError(DnasimError):
 
 class PlantError(DnasimError):
     """A plant description is invalid (structure, parameters, connections)."""
+
+
+class OutputError(DnasimError):
+    """A result file cannot be created or written (disk full, file size limit,
+    a directory or a foreign file in its place, no permission).
+
+    ``path`` is the file, ``t_reached`` the simulated time [s] of the last whole
+    row on disk (None: no row), ``rows`` the number of whole rows on disk.
+    This is an environment problem, not a bug: the command line exits with 2.
+    """
+
+    def __init__(self, message: str, path=None, t_reached=None, rows: int = 0):
+        super().__init__(message)
+        self.path = path
+        self.t_reached = t_reached
+        self.rows = rows

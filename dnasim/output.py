@@ -6,6 +6,19 @@ buffer of *complete* lines and hands it to the operating system in one
 disk always ends with a whole row, even when the process is killed. ``close``
 flushes and ``fsync``s.
 
+Nothing stale, nothing torn, nothing followed:
+
+- :func:`clear_results` removes a previous run's files (``RESULT_FILES``) before a
+  new run starts, so a run that fails early never leaves old results behind;
+- ``results.csv`` is created with ``O_CREAT | O_EXCL | O_NOFOLLOW`` after that
+  removal: a symbolic link (or any file) planted in its place is never followed;
+  the small tables and the plots go to a fresh temporary file in the same
+  directory (``mkstemp``, also ``O_EXCL``) that is renamed over the target, and a
+  rename replaces a link instead of writing through it;
+- when a write fails (disk full ``ENOSPC``, file size limit ``EFBIG``, ...) the
+  file is truncated back to its last whole row and an
+  :class:`~dnasim.errors.OutputError` names the file and the time of that row.
+
 matplotlib is imported only inside the plotting functions (Agg backend), so
 ``dnasim --help`` does not pay for it.
 """
@@ -13,14 +26,18 @@ matplotlib is imported only inside the plotting functions (Agg backend), so
 from __future__ import annotations
 
 import csv
+import errno
 import math
 import os
 import re
+import tempfile
 import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 __all__ = [
+    "RESULT_FILES",
+    "clear_results",
     "StreamingCSV",
     "column_header",
     "parse_column_header",
@@ -37,6 +54,67 @@ __all__ = [
 
 EVENT_COLUMNS = ("event", "iteration", "time", "switch_value", "component", "switch")
 STEP_COLUMNS = ("time", "step_size", "order")
+
+#: the files a run writes into its output directory (removed before the next run)
+RESULT_FILES = (
+    "results.csv",
+    "events.csv",
+    "steps.csv",
+    "variables.png",
+    "steps.png",
+    "report.txt",
+)
+
+_O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+
+
+def _oserror_text(exc: OSError) -> str:
+    if exc.errno == errno.ENOSPC:
+        return "the disk is full (ENOSPC)"
+    if exc.errno == errno.EFBIG:
+        return "the file size limit is reached (EFBIG)"
+    if exc.errno == getattr(errno, "EDQUOT", None):
+        return "the disk quota is exceeded (EDQUOT)"
+    return exc.strerror or str(exc)
+
+
+def clear_results(out_dir: str | os.PathLike) -> list[Path]:
+    """Remove a previous run's result files (``RESULT_FILES``) from ``out_dir``.
+
+    A symbolic link is removed itself, never what it points to. Raises
+    :class:`~dnasim.errors.OutputError` when one of them cannot be removed (a
+    directory in its place, no permission). Returns the paths removed.
+    """
+    from dnasim.errors import OutputError
+
+    out = Path(out_dir)
+    removed = []
+    for name in RESULT_FILES:
+        path = out / name
+        for leftover in (path, path.with_name(path.name + ".tmp")):
+            try:
+                os.unlink(leftover)
+            except FileNotFoundError:
+                continue
+            except IsADirectoryError:
+                raise OutputError(
+                    f"{leftover} is a directory, where dnasim writes its {name}: remove it or "
+                    "choose another output directory (-o DIR)",
+                    path=leftover,
+                ) from None
+            except OSError as exc:
+                if os.path.isdir(leftover) and not os.path.islink(leftover):
+                    raise OutputError(
+                        f"{leftover} is a directory, where dnasim writes its {name}: remove it "
+                        "or choose another output directory (-o DIR)",
+                        path=leftover,
+                    ) from None
+                raise OutputError(
+                    f"cannot remove the previous run's {leftover}: {_oserror_text(exc)}",
+                    path=leftover,
+                ) from None
+            removed.append(leftover)
+    return removed
 
 
 def column_header(name: str, unit: str | None) -> str:
@@ -125,16 +203,66 @@ class StreamingCSV:
         self.last_time: float | None = None  # first column of the last row on disk
         self._pending: list[tuple[float, str]] = []
         self._last_flush = time.monotonic()
-        self._fd: int | None = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        self._size = 0  # bytes of whole lines on disk
+        self._fd: int | None = None
+        try:
+            # a fresh file: an existing file or a planted symbolic link is an error,
+            # never overwritten or followed (the caller removes the old results first)
+            self._fd = os.open(
+                self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_NOFOLLOW | os.O_CLOEXEC, 0o644
+            )
+        except FileExistsError:
+            raise self._error(
+                "it already exists (another process created it after the old results were "
+                "removed?); it was not overwritten"
+            ) from None
+        except OSError as exc:
+            raise self._error(_oserror_text(exc)) from None
         with _SignalsBlocked():
             self._write_all(_csv_line(self.header))
 
+    def _error(self, why: str, reached: float | None = None):
+        from dnasim.errors import OutputError
+
+        if self.last_time is None:
+            where = "before the first row"
+        else:
+            where = (
+                f"after {self.rows_written} whole rows, at simulated time t = "
+                f"{self.last_time:.6g} s"
+            )
+        if reached is not None and reached != self.last_time:
+            where += f" (the simulation had reached t = {reached:.6g} s)"
+        return OutputError(
+            f"cannot write {self.path}: {why}; the file stops {where}",
+            path=self.path,
+            t_reached=self.last_time,
+            rows=self.rows_written,
+        )
+
     def _write_all(self, text: str) -> None:
+        """Write whole lines; on failure cut the file back to the last whole line."""
         data = text.encode("utf-8")
         view = memoryview(data)
-        while view:
-            n = os.write(self._fd, view)
-            view = view[n:]
+        try:
+            while view:
+                n = os.write(self._fd, view)
+                view = view[n:]
+        except OSError as exc:
+            reached = self._pending[-1][0] if self._pending else None
+            try:
+                os.ftruncate(self._fd, self._size)
+                os.lseek(self._fd, self._size, os.SEEK_SET)
+            except OSError:
+                pass
+            self._pending = []
+            fd, self._fd = self._fd, None
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+            raise self._error(_oserror_text(exc), reached) from None
+        self._size += len(data)
 
     @property
     def closed(self) -> bool:
@@ -167,18 +295,21 @@ class StreamingCSV:
             self._last_flush = time.monotonic()
 
     def close(self) -> None:
-        """Flush, fsync and close. Safe to call twice."""
+        """Flush, fsync and close. Safe to call twice. A failed final write raises
+        :class:`~dnasim.errors.OutputError` (the file then ends with a whole row)."""
         if self._fd is None:
             return
         try:
             self.flush()
-            try:
-                os.fsync(self._fd)
-            except OSError:
-                pass
+            if self._fd is not None:
+                try:
+                    os.fsync(self._fd)
+                except OSError:
+                    pass
         finally:
-            os.close(self._fd)
-            self._fd = None
+            if self._fd is not None:
+                os.close(self._fd)
+                self._fd = None
 
     def __enter__(self) -> StreamingCSV:
         return self
@@ -188,7 +319,8 @@ class StreamingCSV:
 
     def __del__(self):  # pragma: no cover - last resort
         try:
-            self.close()
+            if getattr(self, "_fd", None) is not None:
+                self.close()
         except Exception:
             pass
 
@@ -203,25 +335,61 @@ def _csv_line(fields: Iterable) -> str:
     return ",".join(out) + "\n"
 
 
+def _atomic_write(path: str | os.PathLike, write) -> Path:
+    """``write(file_object)`` into a fresh temporary file next to ``path`` (created
+    with ``O_EXCL``, so nothing planted there is followed), fsync, then rename it
+    over ``path`` (a rename replaces a symbolic link, it does not write through it).
+    Failures raise :class:`~dnasim.errors.OutputError` naming ``path``; the
+    temporary file is removed and ``path`` is left as it was."""
+    from dnasim.errors import OutputError
+
+    path = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {_oserror_text(exc)}", path=path) from None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            try:
+                os.fsync(f.fileno())
+            except OSError as exc:
+                if exc.errno in (errno.ENOSPC, errno.EFBIG, errno.EIO):
+                    raise
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(exc, IsADirectoryError) or (path.is_dir() and not path.is_symlink()):
+            raise OutputError(f"cannot write {path}: it is a directory", path=path) from None
+        raise OutputError(f"cannot write {path}: {_oserror_text(exc)}", path=path) from None
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return path
+
+
 def _write_table(path: str | os.PathLike, header: Sequence[str], rows: Iterable[Sequence]) -> None:
     """Write a small CSV completely: temporary file, fsync, rename."""
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", newline="", encoding="utf-8") as f:
-        f.write(_csv_line(header))
+
+    def write(f):
+        f.write(_csv_line(header).encode("utf-8"))
         for row in rows:
             f.write(
                 _csv_line(
                     format_value(v) if isinstance(v, float) else ("" if v is None else v)
                     for v in row
-                )
+                ).encode("utf-8")
             )
-        f.flush()
-        try:
-            os.fsync(f.fileno())
-        except OSError:
-            pass
-    os.replace(tmp, path)
+
+    _atomic_write(path, write)
 
 
 def _split_event_name(entry: dict) -> tuple[str, str]:
@@ -386,8 +554,12 @@ def plot_variables(
         fig.suptitle(title)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        _atomic_write(
+            path, lambda f: fig.savefig(f, dpi=110, format=path.suffix.lstrip(".") or "png")
+        )
+    finally:
+        plt.close(fig)
     return path
 
 
@@ -424,8 +596,12 @@ def plot_steps(
         fig.suptitle(title)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        _atomic_write(
+            path, lambda f: fig.savefig(f, dpi=110, format=path.suffix.lstrip(".") or "png")
+        )
+    finally:
+        plt.close(fig)
     return path
 
 

@@ -83,7 +83,38 @@ SIMULATION_KEYS = {
     "max_order": "maximum BDF order, 1..5 (default 4)",
     "start": '"steady" (steady state at t_start) or "given" (initial states from parameters)',
     "max_step": "largest step size [s] (default: unlimited)",
+    "max_steps": "most accepted steps before the run stops (default 500000)",
 }
+
+#: Upper limits of counts, in one place: a plant file asking for more is refused
+#: before anything is allocated, with the value and the limit in the message.
+#: ``count`` applies to every integer parameter not listed by name.
+LIMITS: dict[str, int] = {
+    "n_volumes": 1000,  # control volumes of one pipe
+    "n_sections": 1000,  # sections of one heat exchanger
+    "n_inlets": 64,  # inlets of one mixer
+    "n_outlets": 64,  # outlets of one splitter
+    "count": 10_000,  # any other integer parameter
+    "cells": 20_000,  # volumes and sections of the whole plant together
+    "components": 2_000,  # components of one plant
+    "output_points": 10_000_000,  # rows of results.csv from output_interval
+    "max_steps": 100_000_000,  # [simulation] max_steps / --max-steps
+}
+
+
+def limit_message(what: str, value, limit) -> str:
+    """``n_volumes = 100000 is above the limit of 1000``."""
+    return f"{what} = {value:g} is above the limit of {limit:g}"
+
+
+def output_point_count(t_start: float, t_end: float, interval: float) -> float:
+    """Number of rows an output interval asks for (a float: it may be huge or inf)."""
+    ratio = (t_end - t_start) / interval
+    if not math.isfinite(ratio):
+        return math.inf
+    return math.floor(ratio + 1e-9) + 1.0
+
+
 _TOP_LEVEL = ("plant", "simulation", "components")
 
 
@@ -102,14 +133,36 @@ class SimulationSettings:
     max_order: int = 4
     start: str = "steady"
     max_step: float | None = None
+    max_steps: int | None = None
+
+    def output_points(self) -> float | None:
+        """How many rows ``output_interval`` asks for (None: every accepted step)."""
+        if self.output_interval is None:
+            return None
+        return output_point_count(self.t_start, self.t_end, self.output_interval)
+
+    def check_output_points(self) -> None:
+        """Raise ``PlantError`` when ``output_interval`` asks for more rows than
+        ``LIMITS["output_points"]`` (checked before any grid is built)."""
+        n = self.output_points()
+        limit = LIMITS["output_points"]
+        if n is not None and not n <= limit:
+            raise PlantError(
+                f"[simulation] output_interval = {self.output_interval:g} s from "
+                f"{self.t_start:g} s to t_end = {self.t_end:g} s asks for {n:g} output "
+                f"points, above the limit of {limit:g}; choose a longer output_interval or "
+                "a shorter t_end"
+            )
 
     def t_eval(self):
-        """Output times for ``output_interval`` (None: every accepted step)."""
+        """Output times for ``output_interval`` (None: every accepted step); raises
+        ``PlantError`` above ``LIMITS["output_points"]`` rows."""
         if self.output_interval is None:
             return None
         import numpy as np
 
-        n = int(math.floor((self.t_end - self.t_start) / self.output_interval + 1e-9))
+        self.check_output_points()
+        n = int(self.output_points()) - 1
         t = self.t_start + self.output_interval * np.arange(n + 1)
         if t[-1] < self.t_end - 1e-9 * max(1.0, abs(self.t_end)):
             t = np.append(t, self.t_end)
@@ -413,6 +466,11 @@ def read_plant_file(path: str | Path) -> tuple[dict, str]:
 def _decode(text: str, path: str) -> dict:
     try:
         return tomllib.loads(text)
+    except RecursionError:
+        raise PlantError(
+            f"{path}: malformed plant file: arrays or tables nested too deeply (a plant file "
+            "needs at most a few levels)"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         msg = str(exc)
         m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
@@ -451,13 +509,15 @@ def _as_text(v, errors: _Errors, table, key) -> str | None:
     return v
 
 
-def _quantity(v, unit, errors, table, key, *, difference=False, signal_units=()) -> float | None:
+def _quantity(
+    v, unit, errors, table, key, *, difference=False, lenient_difference=False
+) -> float | None:
     """A number or unit string in ``unit`` (SI); ``None`` after reporting an error.
 
-    ``difference``: a temperature difference ("10 degC" is 10 K).
-    ``signal_units``: units of the signals linked into the component; a controller's
-    dimensionless parameter may then also carry the signal's unit (setpoint =
-    "540 degC") or its inverse (Kp = "0.02 1/K"), converted to SI.
+    ``difference``: the parameter is a temperature difference: "2 K" and
+    "2 delta_degC" are 2 K, "2 degC" (an absolute temperature, 275.15 K) is an error.
+    ``lenient_difference``: a difference where "10 degC" may mean 10 K (the
+    amplitude of a sine next to its mean in degC).
     """
     if isinstance(v, dict | list):
         errors.add(
@@ -467,40 +527,95 @@ def _quantity(v, unit, errors, table, key, *, difference=False, signal_units=())
             f"got {_type_name(v)}",
         )
         return None
-    targets = [unit]
-    for su in signal_units:
-        if su and parse_unit(su).dims != parse_unit("1").dims:
-            targets += [f"({unit}).({su})", f"({unit})/({su})"]
-    first_error = None
-    for target in targets:
-        try:
-            return _convert_value(v, target, difference)
-        except UnitError as exc:
-            if first_error is None:
-                first_error = exc
-            if "dimension" not in str(exc):
-                break
-    msg = str(first_error)
-    if len(targets) > 1 and "dimension" in msg:
-        msg += (
-            f" (as this component reads a signal in {', '.join(sorted(set(signal_units)))}, "
-            "its dimensionless parameters may also carry that unit or its inverse)"
-        )
-    errors.add(table, key, msg)
-    return None
+    try:
+        return _convert_value(v, unit, difference, lenient_difference)
+    except UnitError as exc:
+        errors.add(table, key, str(exc))
+        return None
 
 
-def _convert_value(v, unit: str, difference: bool) -> float:
-    if difference and isinstance(v, str):
-        from dnasim.units import Unit, convert, has_unit, parse_quantity
+def _convert_value(v, unit: str, difference: bool, lenient_difference: bool = False) -> float:
+    from dnasim.units import Unit, convert, has_unit, parse_quantity
 
-        number, u = parse_quantity(v)
-        if not has_unit(v):
-            return float(number)
-        if u.offset:  # "10 degC" as a difference is 10 K
-            u = Unit(u.dims, u.scale)
-        return float(convert(number, u, unit))
+    if not isinstance(v, str) or not has_unit(v):
+        return to_si(v, unit)
+    number, u = parse_quantity(v)
+    target = parse_unit(unit)
+    if u.offset:
+        absolute = number * u.scale + u.offset
+        if lenient_difference:  # "10 degC" as a difference is 10 K
+            return float(convert(number, Unit(u.dims, u.scale), unit))
+        if target.dims != u.dims:
+            hint = ""
+            if target.dims == parse_unit("1/K").dims:
+                hint = f"; a gain per kelvin is written '{number:g} 1/K'"
+            raise UnitError(
+                f"{v!r} is an absolute temperature ({absolute:g} K: degC and degF have an "
+                f"offset), but {target.dimension} is expected (unit {unit!r}){hint}"
+            )
+        if difference:
+            raise UnitError(
+                f"{v!r} is an absolute temperature ({absolute:g} K), but this parameter is a "
+                f"temperature difference: write '{number:g} K' or '{number:g} delta_degC'"
+            )
     return to_si(v, unit)
+
+
+#: Temporary, until the component files carry the markers themselves (Param unit
+#: "delta_K" for a temperature difference; Param.per_signal for a parameter in the
+#: unit of the measured signal (1) or its inverse (-1)); read only when a Param has
+#: no marker of its own.
+_DIFFERENCE_FALLBACK = {("Pipe", "dT_reg"), ("HeatExchanger", "dT_reg")}
+_PER_SIGNAL_FALLBACK = {
+    ("PIController", "Kp"): -1,
+    ("PIController", "KI"): -1,
+    ("PIController", "setpoint"): 1,
+    ("PIController", "measured_nominal"): 1,
+}
+#: signal inputs that accept a signal of any unit (SignalPort unit "*")
+_ANY_UNIT_INPUT_FALLBACK = {("PIController", "measured")}
+
+
+def is_difference(cls, p) -> bool:
+    """Whether parameter ``p`` of ``cls`` is a temperature difference (unit "delta_K")."""
+    unit = _param_unit(p)
+    if unit.startswith("delta_"):
+        return True
+    return unit == "K" and (getattr(cls, "__name__", ""), p.name) in _DIFFERENCE_FALLBACK
+
+
+def per_signal(cls, p) -> int:
+    """The power of the measured signal's unit in ``p``'s unit (Kp: -1, setpoint: 1)."""
+    k = getattr(p, "per_signal", None)
+    if k is None:
+        k = _PER_SIGNAL_FALLBACK.get((getattr(cls, "__name__", ""), p.name), 0)
+    return int(k)
+
+
+def input_unit(cls, port) -> str:
+    """The unit a signal input expects; "*" for any unit."""
+    unit = str(getattr(port, "unit", "1") or "1")
+    if (getattr(cls, "__name__", ""), getattr(port, "name", port)) in _ANY_UNIT_INPUT_FALLBACK:
+        return "*"
+    return unit
+
+
+def param_unit_for(cls, p, signal_units=()) -> str:
+    """The SI unit a plant-file value of ``p`` is converted to: the declared unit,
+    times the measured signal's unit to the power ``per_signal`` (Kp of a
+    temperature controller: 1/K)."""
+    unit = _param_unit(p)
+    if unit.startswith("delta_"):
+        unit = unit[len("delta_") :]
+    k = per_signal(cls, p)
+    su = next((u for u in signal_units if u), None)
+    if k and su is not None and parse_unit(su).dims != parse_unit("1").dims:
+        s_su = su if re.fullmatch(r"[A-Za-z]+", su) else f"({su})"
+        if k > 0:
+            unit = su if unit == "1" else f"({unit}).{s_su}"
+        else:
+            unit = f"{unit}/{s_su}" if re.fullmatch(r"[A-Za-z0-9/]+", unit) else f"({unit})/{s_su}"
+    return unit
 
 
 def _example(unit: str) -> str:
@@ -551,12 +666,12 @@ def _check_range(x: float, p, errors, table, key, shown) -> None:
         )
 
 
-def _time_function(v: dict, p, errors: _Errors, table, key, signal_units=()):
-    """Build a time function from an inline table ``{type = "step", ...}``."""
+def _time_function(v: dict, p, errors: _Errors, table, key, unit: str, difference=False):
+    """Build a time function from an inline table ``{type = "step", ...}``; its
+    values are in ``unit``."""
     from dnasim import timefunctions as tf
 
     sub = tuple(table) + (key,)
-    unit = _param_unit(p)
     kind = v.get("type")
     if kind is None:
         errors.add(
@@ -598,7 +713,13 @@ def _time_function(v: dict, p, errors: _Errors, table, key, signal_units=()):
         if k == "phase":
             return _quantity(x, "1", errors, sub, k)
         return _quantity(
-            x, unit, errors, sub, k, difference=k in _TF_DIFFERENCE_KEYS, signal_units=signal_units
+            x,
+            unit,
+            errors,
+            sub,
+            k,
+            difference=difference,
+            lenient_difference=k in _TF_DIFFERENCE_KEYS and not difference,
         )
 
     vals: dict[str, Any] = {}
@@ -701,6 +822,20 @@ def _simulation(data, errors: _Errors) -> SimulationSettings:
                     setattr(s, k, x)
     if "t_end" in sim and "t_start" in sim and s.t_end <= s.t_start:
         errors.add(table, "t_end", f"must be after t_start ({s.t_end:g} s <= {s.t_start:g} s)")
+    elif s.output_interval is not None:
+        try:
+            s.check_output_points()
+        except PlantError as exc:
+            errors.add(table, "output_interval", str(exc).removeprefix("[simulation] "))
+    if "max_steps" in sim:
+        x = sim["max_steps"]
+        limit = LIMITS["max_steps"]
+        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
+            errors.add(table, "max_steps", f"expected a positive integer, got {x!r}")
+        elif x > limit:
+            errors.add(table, "max_steps", limit_message("max_steps", x, limit))
+        else:
+            s.max_steps = x
     for k, lo, hi in (("rtol", 0.0, 1.0), ("atol", 0.0, math.inf)):
         if k in sim:
             x = _quantity(sim[k], "1", errors, table, k)
@@ -726,6 +861,16 @@ def _simulation(data, errors: _Errors) -> SimulationSettings:
 
 _NAME_OK = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
 
+#: called with the medium name before a medium with CoolProp property tables
+#: (BICUBIC&..., TTSE&...) is first built; the command line prints a notice
+TABULAR_NOTICE = None
+_NOTIFIED: set[str] = set()
+
+
+def _is_tabular(name: str) -> bool:
+    backend = name.split("::", 1)[0].upper() if "::" in name else ""
+    return backend.startswith(("BICUBIC", "TTSE"))
+
 
 def _check_medium(name: str, errors: _Errors, table, key) -> None:
     """An unknown fluid name is reported here, with its place in the file."""
@@ -733,6 +878,9 @@ def _check_medium(name: str, errors: _Errors, table, key) -> None:
         from dnasim.media import get_medium
     except ImportError:  # pragma: no cover - media layer missing
         return
+    if TABULAR_NOTICE is not None and _is_tabular(name) and name.upper() not in _NOTIFIED:
+        _NOTIFIED.add(name.upper())
+        TABULAR_NOTICE(name)
     try:
         get_medium(name)
     except PlantError as exc:
@@ -741,28 +889,30 @@ def _check_medium(name: str, errors: _Errors, table, key) -> None:
         errors.add(table, key, f"unknown fluid {name!r}: {exc}")
 
 
-def _signal_units(comps: dict, registry) -> dict[str, list[str]]:
+def _signal_units(comps: dict, registry) -> dict[str, list[str | None]]:
     """For each component, the units of the signal outputs linked into it (from the raw
-    tables, before validation; anything malformed is skipped here and reported later)."""
-    out: dict[str, list[str]] = {}
+    tables, before validation); ``None`` for a link that does not lead to a known
+    signal output (reported later, by the network check)."""
+    out: dict[str, list[str | None]] = {}
     for name, table in comps.items():
         if not isinstance(table, dict) or not isinstance(table.get("inputs"), dict):
             continue
         for src in table["inputs"].values():
-            if not isinstance(src, str) or src.count(".") != 1:
-                continue
-            cname, oname = src.split(".")
-            other = comps.get(cname)
-            if not isinstance(other, dict) or not isinstance(other.get("type"), str):
-                continue
-            cls = registry.get(other["type"])
-            for port in getattr(cls, "SIGNAL_OUTPUTS", ()) or ():
-                if getattr(port, "name", None) == oname and getattr(port, "unit", None):
-                    try:
-                        parse_unit(port.unit)
-                    except UnitError:
-                        continue
-                    out.setdefault(name, []).append(port.unit)
+            unit = None
+            if isinstance(src, str) and src.count(".") == 1:
+                cname, oname = src.split(".")
+                other = comps.get(cname)
+                cls = None
+                if isinstance(other, dict) and isinstance(other.get("type"), str):
+                    cls = registry.get(other["type"])
+                for port in getattr(cls, "SIGNAL_OUTPUTS", ()) or ():
+                    if getattr(port, "name", None) == oname and getattr(port, "unit", None):
+                        try:
+                            parse_unit(port.unit)
+                        except UnitError:
+                            continue
+                        unit = port.unit
+            out.setdefault(name, []).append(unit)
     return out
 
 
@@ -817,6 +967,7 @@ def _component(
     sin = signal_inputs(cls)
     sout = signal_outputs(cls)
     n0 = len(errors.items)
+    unchecked = False
     for key, value in table_data.items():
         if key in RESERVED_KEYS:
             continue
@@ -836,7 +987,12 @@ def _component(
                 f"unknown parameter of {tname}{hint} (parameters: {', '.join(params) or 'none'})",
             )
             continue
-        spec.params[key] = _param_value(value, p, errors, table, key, signal_units)
+        if per_signal(cls, p) and (not signal_units or None in signal_units):
+            # in the unit of a signal that is not (properly) linked: the broken link is
+            # reported by the network check; unit errors here would only follow from it
+            unchecked = True
+            continue
+        spec.params[key] = _param_value(value, p, errors, table, key, signal_units, cls)
         if key == "medium" and isinstance(spec.params[key], str):
             _check_medium(spec.params[key], errors, table, key)
     for pname, p in params.items():
@@ -850,7 +1006,7 @@ def _component(
                 + (f" ({doc})" if doc else "")
                 + (f', e.g. {pname} = "{_example(unit)}"' if _param_kind(p) == "number" else ""),
             )
-    if len(errors.items) == n0:
+    if len(errors.items) == n0 and not unchecked:
         # the parameters are valid: build the component now (cheap, no numerics) so
         # that its own checks run and ports that depend on parameters are known
         try:
@@ -931,6 +1087,25 @@ def _component(
                     "port; "
                     f'fluid ports are connected to nodes in ports = {{ {inp} = "node" }}',
                 )
+            elif _port(getattr(cls, "SIGNAL_INPUTS", ()), inp) is not None:
+                # the class has this input, this instance not: a parameter replaces it
+                doc = getattr(_port(cls.SIGNAL_INPUTS, inp), "doc", "") or ""
+                given = [q for q in re.findall(r"'([A-Za-z_]\w*)'", doc) if q in table_data]
+                if given:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"both the parameter '{given[0]}' and the signal input '{inp}' are "
+                        f"given; {tname} takes one of them: a fixed {given[0]} = ..., or "
+                        f'inputs = {{ {inp} = "component.output" }} to drive it',
+                    )
+                else:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"{tname} has the signal input '{inp}' only with other parameters"
+                        + (f" ({doc})" if doc else ""),
+                    )
             else:
                 errors.add(
                     sub,
@@ -958,9 +1133,10 @@ def _component(
     return spec
 
 
-def _param_value(value, p, errors, table, key, signal_units=()):
+def _param_value(value, p, errors, table, key, signal_units=(), cls=None):
     kind = _param_kind(p)
-    unit = _param_unit(p)
+    unit = param_unit_for(cls, p, signal_units)
+    difference = is_difference(cls, p)
     if kind == "string":
         if not isinstance(value, str):
             errors.add(table, key, f"expected a string, got {_type_name(value)} ({value!r})")
@@ -990,8 +1166,8 @@ def _param_value(value, p, errors, table, key, signal_units=()):
                 "allowed only for boundary values and setpoints",
             )
             return None
-        return _time_function(value, p, errors, table, key, signal_units)
-    x = _quantity(value, unit, errors, table, key, signal_units=signal_units)
+        return _time_function(value, p, errors, table, key, unit, difference)
+    x = _quantity(value, unit, errors, table, key, difference=difference)
     if x is None:
         return None
     if kind in ("int", "integer"):
@@ -999,11 +1175,25 @@ def _param_value(value, p, errors, table, key, signal_units=()):
             errors.add(table, key, f"expected an integer, got {value!r}")
             return None
         x = int(x)
+        limit = LIMITS.get(p.name, LIMITS["count"])
+        if x > limit:
+            errors.add(table, key, limit_message(p.name, x, limit))
+            return None
     _check_range(x, p, errors, table, key, repr(value) if isinstance(value, str) else f"{x:g}")
     return x
 
 
-def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
+def _network(specs: list[ComponentSpec], errors: _Errors, broken: dict | None = None) -> None:
+    """Nodes with one port, signals from unknown components or outputs, signal
+    dimensions. ``broken``: raw tables of components already reported as invalid;
+    what follows only from their absence (their nodes, their outputs) is not
+    reported again."""
+    broken = broken or {}
+    broken_nodes = set()
+    for table in broken.values():
+        ports = table.get("ports") if isinstance(table, dict) else None
+        if isinstance(ports, dict):
+            broken_nodes.update(n for n in ports.values() if isinstance(n, str))
     by_name = {c.name: c for c in specs}
     node_members: dict[str, list[tuple[str, str]]] = {}
     for c in specs:
@@ -1018,7 +1208,7 @@ def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
                 f"name used twice: '{node}' is both a component and a node; "
                 "give the node another name",
             )
-        if len(members) == 1:
+        if len(members) == 1 and node not in broken_nodes:
             c, port = members[0]
             errors.add(
                 ("components", c, "ports"),
@@ -1032,9 +1222,15 @@ def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
             comp, out = src.split(".")
             other = by_name.get(comp)
             if other is None:
-                errors.add(sub, inp, f"no component named '{comp}'{_suggest(comp, by_name)}")
+                if comp not in broken:
+                    errors.add(sub, inp, f"no component named '{comp}'{_suggest(comp, by_name)}")
                 continue
             outs = other.signal_outputs
+            if out in outs:
+                msg = _link_dimension_problem(c, inp, other, out)
+                if msg:
+                    errors.add(sub, inp, msg)
+                continue
             if out not in outs:
                 if out in other.fluid_ports:
                     errors.add(
@@ -1050,6 +1246,35 @@ def _network(specs: list[ComponentSpec], errors: _Errors) -> None:
                         f"{other.type} '{comp}' has no signal output '{out}'{_suggest(out, outs)} "
                         f"(outputs: {', '.join(outs) or 'none'})",
                     )
+
+
+def _port(ports, name):
+    return next((q for q in ports or () if getattr(q, "name", None) == name), None)
+
+
+def _link_dimension_problem(dest: ComponentSpec, inp: str, src: ComponentSpec, out: str):
+    """Why the signal ``src.out`` cannot drive ``dest.inp`` (units of another dimension),
+    or None. Inputs with unit "*" take any signal."""
+    q_in = _port(getattr(dest.cls, "SIGNAL_INPUTS", ()), inp)
+    q_out = _port(getattr(src.cls, "SIGNAL_OUTPUTS", ()), out)
+    if q_in is None or q_out is None:
+        return None
+    want, have = input_unit(dest.cls, q_in), str(getattr(q_out, "unit", "1") or "1")
+    if want == "*":
+        return None
+    try:
+        uw, uh = parse_unit(want), parse_unit(have)
+    except UnitError:
+        return None
+    if uw.dims == uh.dims:
+        return None
+    doc = getattr(q_in, "doc", "") or ""
+    return (
+        f"dimension mismatch: '{src.name}.{out}' is a {uh.dimension} signal [{have}], but the "
+        f"input '{inp}' of {dest.type} '{dest.name}' expects {uw.dimension} [{want}]"
+        + (f" ({doc})" if doc else "")
+        + "; link a signal of that dimension, e.g. a controller output"
+    )
 
 
 def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> PlantSpec:
@@ -1106,12 +1331,36 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
                 (), "components", 'no components: add tables [components.<name>] with type = "..."'
             )
         registry = _registry()
+        if len(comps) > LIMITS["components"]:
+            errors.add(
+                (),
+                "components",
+                limit_message("the number of components", len(comps), LIMITS["components"]),
+            )
+            errors.raise_if_any()
         sig_units = _signal_units(comps, registry)
+        broken = {}
         for cname, ctable in comps.items():
             spec = _component(cname, ctable, registry, errors, tuple(sig_units.get(cname, ())))
             if spec is not None:
                 specs.append(spec)
-        _network(specs, errors)
+            else:
+                broken[cname] = ctable
+        _network(specs, errors, broken)
+        cells = sum(
+            v
+            for c in specs
+            for k, v in c.params.items()
+            if k in ("n_volumes", "n_sections") and isinstance(v, int)
+        )
+        if cells > LIMITS["cells"]:
+            errors.add(
+                ("components",),
+                None,
+                limit_message(
+                    "the number of volumes and sections in the plant", cells, LIMITS["cells"]
+                ),
+            )
     errors.raise_if_any()
     return PlantSpec(
         path=str(path),

@@ -13,6 +13,7 @@ Usable from Python too::
 
 from __future__ import annotations
 
+import inspect
 import math
 import time
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ from typing import Any
 
 from dnasim.output import (
     StreamingCSV,
+    clear_results,
     column_header,
     plot_steps,
     plot_variables,
@@ -33,6 +35,7 @@ from dnasim.output import (
 __all__ = [
     "RunOutcome",
     "run_plant",
+    "solve_streaming",
     "write_plots",
     "describe_report",
     "format_component",
@@ -67,6 +70,8 @@ class RunOutcome:
             if self.t_reached is None
             else f"at t = {self.t_reached:.6g} s"
         )
+        if self.status == "output-error":
+            return self.message
         verb = "was interrupted" if self.status == "interrupted" else "failed"
         csv_note = (
             f"; {self.out_dir / 'results.csv'} holds the {self.rows} rows up to that time"
@@ -145,6 +150,53 @@ class _Progress:
             self.bar = None
 
 
+def solve_streaming(plant, sim, callback, *, dense_output: bool = False):
+    """Integrate ``plant`` with the settings ``sim`` and hand every output point to
+    ``callback(t, y, yp)``; returns the solver's ``DAEResult``.
+
+    ``dense_output=True`` (``run_plant(keep_rows=True)``) keeps the rows and the
+    dense output in the result; otherwise a solver that has ``keep_output`` is
+    asked not to keep the rows at all.
+
+    The same DAE, start and tolerances as ``Plant.simulate``, but for streaming:
+    no dense output (the Nordsieck pieces of every step), no ``PlantResults``
+    table, and ``sim.max_steps`` reaches ``solve_dae``. ``sim.t_eval()`` checks the
+    number of output points against its limit before the grid exists.
+    """
+    from dnasim.solver import solve_dae
+
+    dae = plant.assemble()
+    t0, t_end = sim.t_start, sim.t_end
+    t_eval = sim.t_eval()
+    y0, yp0 = plant.initial_values(t0, sim.start)
+    kwargs = {}
+    if getattr(sim, "max_steps", None) is not None:
+        kwargs["max_steps"] = int(sim.max_steps)
+    if not dense_output and "keep_output" in inspect.signature(solve_dae).parameters:
+        # a solver that can hand rows to the callback only: nothing grows with the rows
+        kwargs["keep_output"] = False
+    return solve_dae(
+        dae.residual,
+        (t0, t_end),
+        y0,
+        yp0,
+        algebraic=dae.algebraic,
+        jac_sparsity=dae.jac_sparsity,
+        calc_initial=False,
+        variable_names=dae.names,
+        rtol=sim.rtol,
+        atol=dae.atol_vector(sim.atol, y0),
+        max_order=sim.max_order,
+        max_step=sim.max_step if sim.max_step is not None else math.inf,
+        events=dae.events,
+        tstops=dae.tstops(t0, t_end),
+        t_eval=t_eval,
+        callback=callback,
+        dense_output=dense_output,
+        **kwargs,
+    )
+
+
 def run_plant(
     loaded,
     out_dir,
@@ -153,52 +205,80 @@ def run_plant(
     interrupt_types: tuple = (KeyboardInterrupt,),
     flush_rows: int = 200,
     flush_seconds: float = 1.0,
+    keep_rows: bool = False,
 ) -> RunOutcome:
     """Simulate ``loaded`` (a ``dnasim.plantfile.LoadedPlant``), streaming into ``out_dir``.
 
-    Returns a :class:`RunOutcome`; failures of the simulation (``DAEError``) and
-    interrupts are reported in it, never raised. ``PlantError`` (a plant that
-    cannot be assembled) is raised.
+    The previous run's result files are removed first (:func:`clear_results`), so
+    whatever is in ``out_dir`` afterwards belongs to this run. Rows go to
+    ``results.csv`` as they are computed and are not kept in memory; with
+    ``keep_rows=True`` the solver's result (``outcome.result``, a ``DAEResult``)
+    also holds them (t, y, yp) and its dense output.
+
+    Returns a :class:`RunOutcome`; failures of the simulation (``DAEError``),
+    interrupts and a result file that cannot be written (status "output-error":
+    disk full, file size limit) are reported in it, never raised. ``PlantError``
+    (a plant that cannot be assembled) and ``OutputError`` from clearing the
+    directory are raised.
     """
-    from dnasim.errors import DAEError
-    from dnasim.plantfile import simulate_plant
+    from dnasim.errors import DAEError, OutputError
 
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(
+            f"cannot create the output directory {out}: {exc.strerror or exc}", path=out
+        ) from None
+    clear_results(out)
     sim = loaded.simulation
     plant = loaded.plant
     t_start = time.perf_counter()
 
-    state: dict[str, Any] = {"writer": None, "row": None, "times": [], "last_t": None}
+    state: dict[str, Any] = {
+        "writer": None,
+        "row": None,
+        "last_t": None,
+        "prev_t": None,
+        "steps": [],
+        "output_error": None,
+    }
     bar = _Progress(sim.t_start, sim.t_end, progress)
     results_path = out / "results.csv"
-    # the header needs the plant's layout, which exists only once it is assembled:
-    # open the writer at the first callback
-    for stale in ("events.csv", "steps.csv"):
-        try:
-            (out / stale).unlink()
-        except FileNotFoundError:
-            pass
+    # without an output interval the rows are the accepted steps: their spacing is the
+    # step size, kept (3 floats a step) for steps.csv in case the solver hands nothing over
+    rows_are_steps = sim.output_interval is None
 
     def callback(t, y, yp):
-        w = state["writer"]
-        if w is None:
-            names, units, row = plant_output_layout(plant)
-            header = [column_header("time", "s")] + [column_header(n, units.get(n)) for n in names]
-            w = StreamingCSV(
-                results_path, header, flush_rows=flush_rows, flush_seconds=flush_seconds
-            )
-            state["writer"], state["row"] = w, row
-            state["names"], state["units"] = names, units
-        values = state["row"](t, y, yp)
-        w.write_row([t, *values])
-        state["times"].append(float(t))
-        bar.update(float(t))
+        try:
+            w = state["writer"]
+            if w is None:
+                names, units, row = plant_output_layout(plant)
+                header = [column_header("time", "s")] + [
+                    column_header(n, units.get(n)) for n in names
+                ]
+                w = StreamingCSV(
+                    results_path, header, flush_rows=flush_rows, flush_seconds=flush_seconds
+                )
+                state["writer"], state["row"] = w, row
+            values = state["row"](t, y, yp)
+            w.write_row([t, *values])
+        except OutputError as exc:
+            state["output_error"] = exc
+            # a DAEError stops the solver, which then hands over its partial result
+            raise DAEError(str(exc)) from exc
+        t = float(t)
+        if rows_are_steps:
+            prev = state["prev_t"]
+            if prev is not None and t > prev:
+                state["steps"].append((t, t - prev, math.nan))
+            state["prev_t"] = t
+        bar.update(t)
 
     status, message, result = "finished", "", None
     try:
         try:
-            result = simulate_plant(plant, sim, callback=callback)
+            result = solve_streaming(plant, sim, callback, dense_output=keep_rows)
             success = bool(getattr(result, "success", True))
             if not success:
                 status = "failed"
@@ -209,27 +289,62 @@ def run_plant(
             status, success = "failed", False
             message = str(exc)
             result = getattr(exc, "result", None)
-        except interrupt_types:
+        except interrupt_types as exc:
             status, success = "interrupted", False
             message = "interrupted by the user (Ctrl-C or SIGTERM)"
+            result = getattr(exc, "result", None)
     finally:
         bar.close()
-        if state["writer"] is not None:
-            state["writer"].close()
-            state["last_t"] = state["writer"].last_time  # the last row on disk
+        w = state["writer"]
+        if w is not None:
+            try:
+                w.close()
+            except OutputError as exc:
+                if state["output_error"] is None:
+                    state["output_error"] = exc
+            state["last_t"] = w.last_time  # the last row on disk
+    if state["output_error"] is not None:
+        status, success = "output-error", False
+        message = str(state["output_error"])
     wall = time.perf_counter() - t_start
 
     event_log = list(getattr(result, "event_log", None) or [])
     step_history = getattr(result, "step_history", None)
     if (step_history is None or len(step_history) == 0) and status != "finished":
-        # interrupted: the solver handed nothing over; without an output interval the
-        # rows are the accepted steps, so their spacing is the step size (order unknown)
-        step_history = _steps_from_times(state["times"]) if sim.output_interval is None else []
+        # the solver handed nothing over (an interrupt before it could)
+        step_history = state["steps"]
+    elif rows_are_steps and status != "finished" and state["last_t"] is not None:
+        # an interrupt inside the callback: the step is accepted but its row is not
+        # on disk; steps.csv and results.csv end at the same step
+        step_history = [r for r in step_history if r[0] <= state["last_t"]]
+    if not keep_rows and result is not None and hasattr(result, "y"):
+        result.y = result.yp = None  # the rows are in results.csv
     files = []
-    write_events_csv(out / "events.csv", event_log)
-    files.append(out / "events.csv")
-    n_steps = write_steps_csv(out / "steps.csv", step_history if step_history is not None else [])
-    files.append(out / "steps.csv")
+    write_errors = []
+    n_steps = 0
+    for name, write in (
+        ("events.csv", lambda p: write_events_csv(p, event_log)),
+        (
+            "steps.csv",
+            lambda p: write_steps_csv(p, step_history if step_history is not None else []),
+        ),
+    ):
+        try:
+            n = write(out / name)
+        except OutputError as exc:
+            write_errors.append(str(exc))
+            continue
+        files.append(out / name)
+        if name == "steps.csv":
+            n_steps = n
+    if write_errors:
+        if state["output_error"] is None:
+            status, success = "output-error", False
+            message = "; ".join(write_errors)
+        else:
+            message += "; " + "; ".join(write_errors)
+    elif status == "output-error":
+        message += "; events.csv and steps.csv were written"
     if state["writer"] is not None:
         files.insert(0, results_path)
     stats = dict(getattr(result, "stats", None) or {})
@@ -250,16 +365,6 @@ def run_plant(
         event_log=event_log,
         step_history=step_history,
     )
-
-
-def _steps_from_times(times):
-    """Step sizes from the output times when the solver could not hand its history over
-    (an interrupt); the order is unknown there (NaN)."""
-    rows = []
-    for a, b in zip(times, times[1:], strict=False):
-        if b > a:
-            rows.append((b, b - a, math.nan))
-    return rows
 
 
 # --------------------------------------------------------------------------- plots

@@ -109,6 +109,7 @@ _TABLE: dict[str, tuple[Dims, float, float, bool]] = {
     "°F": (_TH, 5.0 / 9.0, 459.67 * 5.0 / 9.0, False),
     "degR": (_TH, 5.0 / 9.0, 0.0, False),
     "delta_degC": (_TH, 1.0, 0.0, False),
+    "delta_K": (_TH, 1.0, 0.0, False),
     "delta_degF": (_TH, 5.0 / 9.0, 0.0, False),
     # amount
     "mol": (_N, 1.0, 0.0, True),
@@ -198,7 +199,11 @@ class Unit:
         )
 
     def __pow__(self, k) -> Unit:
-        return Unit(tuple(a * k for a in self.dims), self.scale ** float(k))
+        try:
+            scale = self.scale ** float(k)
+        except OverflowError:
+            scale = math.inf
+        return Unit(tuple(a * k for a in self.dims), scale)
 
     @property
     def dimension(self) -> str:
@@ -252,6 +257,13 @@ def _lookup(name: str, text: str) -> Unit:
     raise UnitError(f"unknown unit {name!r} in {text!r}{hint}")
 
 
+#: limits of the grammar: exponents up to this magnitude, parentheses this deep,
+#: this many characters (longer expressions are not units, they are mistakes)
+MAX_EXPONENT = 12
+MAX_DEPTH = 20
+MAX_LENGTH = 200
+
+
 class _Parser:
     """Recursive descent over a unit expression."""
 
@@ -262,6 +274,7 @@ class _Parser:
         s = re.sub(r"\*\*\s*", "**", s)
         self.s = s
         self.i = 0
+        self.depth = 0
         self.n_atoms = 0
         self.offset_atoms: list[Unit] = []
 
@@ -274,7 +287,11 @@ class _Parser:
     def parse(self) -> Unit:
         if self.s in ("", "1", "-"):
             return Unit(_NONE)
+        if len(self.text) > MAX_LENGTH:
+            raise self.error(f"longer than {MAX_LENGTH} characters")
         u = self.expr()
+        if not (math.isfinite(u.scale) and u.scale > 0):
+            raise self.error("its size is out of the range of floating-point numbers")
         if self.i != len(self.s):
             raise self.error(f"unexpected {self.s[self.i :]!r}")
         if self.offset_atoms:
@@ -301,11 +318,15 @@ class _Parser:
     def term(self) -> Unit:
         c = self.peek()
         if c == "(":
+            self.depth += 1
+            if self.depth > MAX_DEPTH:
+                raise self.error(f"parentheses nested more than {MAX_DEPTH} deep")
             self.i += 1
             u = self.expr()
             if self.peek() != ")":
                 raise self.error("missing ')'")
             self.i += 1
+            self.depth -= 1
         else:
             m = _NAME_RE.match(self.s, self.i)
             if not m:
@@ -320,7 +341,15 @@ class _Parser:
         m = _EXP_RE.match(self.s, self.i)
         if m:
             self.i = m.end()
-            k = Fraction(m.group(1).strip("()"))
+            try:
+                k = Fraction(m.group(1).strip("()"))
+            except ZeroDivisionError:
+                raise self.error(f"the exponent {m.group(1)} divides by zero") from None
+            if abs(k) > MAX_EXPONENT:
+                raise self.error(
+                    f"the exponent {m.group(1)} is out of range (at most {MAX_EXPONENT} in "
+                    "magnitude)"
+                )
             if k.denominator == 1:
                 k = int(k)
             if k != 1:

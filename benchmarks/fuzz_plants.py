@@ -1,0 +1,273 @@
+"""Fuzz the command line with mutated example plants; print the tally.
+
+Each case takes one plant of plants/*.toml, applies one to three random mutations
+(delete a key, duplicate a line, a value of the wrong type, a wrong or garbled
+unit, an extreme number, a dangling node or signal name, an unknown key or type)
+and runs ``dnasim check`` on it, or, for a sample, ``dnasim run`` with a tiny
+end time. The command runs in-process (click's CliRunner), under an alarm.
+Outcomes:
+
+    clean      exit 0
+    ok         exit 2 with a located message (names the plant file or an option),
+               or exit 1 (the simulation failed: its message says where and why)
+    unlocated  exit 2 without a file or option in the message
+    internal   "internal error" (a bug path of the command line)
+    traceback  an exception escaped the command, or a traceback was printed
+    hang       more than --timeout seconds
+    crash      a worker process died (segfault, out of memory)
+
+The last line printed is the tally. Usage::
+
+    .venv/bin/python benchmarks/fuzz_plants.py                  # 10000 cases, 2 processes
+    .venv/bin/python benchmarks/fuzz_plants.py --n 500 --jobs 1 # quick look
+
+``tests/test_fuzz_plants.py`` drives :func:`mutate` and :func:`classify` from
+hypothesis for about a minute in CI.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+import os
+import random
+import signal
+import sys
+import tempfile
+import time
+import tomllib
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
+
+import tomli_w
+
+ROOT = Path(__file__).resolve().parents[1]
+PLANTS = sorted((ROOT / "plants").glob("*.toml"))
+OUTCOMES = ("clean", "ok", "unlocated", "internal", "traceback", "hang", "crash")
+
+UNITS = [
+    "bar", "Pa", "kPa", "MPa", "degC", "degF", "K", "delta_degC", "kg/s", "t/h", "s", "min",
+    "h", "m3", "m", "W/K", "J/K", "kJ/K", "1/K", "1/(K.s)", "%", "1", "furlong", "m^999",
+    "m^(1/0)", "((((m))))", "kg/(s.Pa0.5)", "W/m2.K", "degC2", "1/degC", "",
+]  # fmt: skip
+NUMBERS = [
+    0, -1, 1, 2, 150, 1e30, -1e30, 1e308, -1e308, 1e-300, 5e-324, 10**20, -(10**20),
+    1000000, 100000, 1.5, math.inf, -math.inf, math.nan,
+]  # fmt: skip
+WRONG = [True, False, [], [1, 2], {}, {"type": "step"}, "", "abc", "1e-300 s", "5000 degC"]
+
+
+# --------------------------------------------------------------------------- mutations
+
+
+def _paths(data, prefix=()):
+    """Every (path, value) below ``data`` (tables and arrays included)."""
+    out = []
+    if isinstance(data, dict):
+        for k, v in data.items():
+            out.append((prefix + (k,), v))
+            out.extend(_paths(v, prefix + (k,)))
+    elif isinstance(data, list):
+        for i, v in enumerate(data):
+            out.append((prefix + (i,), v))
+            out.extend(_paths(v, prefix + (i,)))
+    return out
+
+
+def _parent(data, path):
+    for k in path[:-1]:
+        data = data[k]
+    return data
+
+
+def _new_value(old, rnd: random.Random):
+    kind = rnd.randrange(5)
+    if kind == 0:  # an extreme or odd number
+        return rnd.choice(NUMBERS)
+    if kind == 1 and isinstance(old, str):  # the same number with another unit
+        number = old.split()[0] if old.split() else "1"
+        return f"{number} {rnd.choice(UNITS)}".strip()
+    if kind == 2:  # an extreme number with a plausible unit
+        return (
+            f"{rnd.choice(['1e30', '-5', '0', '1e-300', '5000', '1e6', '1e9'])} {rnd.choice(UNITS)}"
+        )
+    if kind == 3:  # a dangling name
+        return rnd.choice(["nowhere", "sensr.T", "pi.zz", "n_1", "pipe.inlet", "x.y.z", "."])
+    return rnd.choice(WRONG)
+
+
+def mutate(data: dict, rnd: random.Random) -> str:
+    """One to three random mutations of a decoded plant; returns TOML text."""
+    data = copy.deepcopy(data)
+    text_ops = []
+    for _ in range(rnd.randint(1, 3)):
+        paths = _paths(data)
+        op = rnd.randrange(8)
+        if not paths:
+            break
+        path, value = rnd.choice(paths)
+        parent = _parent(data, path)
+        key = path[-1]
+        if op == 0:  # delete a key or an array element
+            del parent[key]
+        elif op in (1, 2, 3):  # a new value: wrong type, wrong unit, extreme, dangling
+            parent[key] = _new_value(value, rnd)
+        elif op == 4 and isinstance(parent, dict):  # an unknown or misspelt key
+            parent[rnd.choice(["foo", str(key) + "_", "Kp", "opening", "n_volumes", "type"])] = (
+                _new_value(value, rnd)
+            )
+        elif op == 5 and isinstance(value, dict) and "type" in value:  # another type
+            value["type"] = rnd.choice(["Pipe", "Valve", "Mixer", "Splitter", "PIController", "X"])
+        elif op == 6 and isinstance(parent, dict) and isinstance(value, dict | int | float | str):
+            parent[str(key) + "_copy"] = copy.deepcopy(value)  # a duplicated component/key
+        else:
+            text_ops.append(rnd.choices((0, 1, 2), weights=(9, 9, 2))[0])
+    try:
+        text = tomli_w.dumps(data)
+    except (TypeError, ValueError):  # e.g. an empty key
+        text = ""
+    lines = text.splitlines()
+    for op in text_ops:
+        if not lines:
+            break
+        i = rnd.randrange(len(lines))
+        if op == 0:  # a duplicated line: the same key twice
+            lines.insert(i, lines[i])
+        elif op == 1:  # a deleted line
+            del lines[i]
+        else:  # deep nesting
+            lines.insert(i, "deep = " + "[" * 1000 + "]" * 1000)
+    return "\n".join(lines) + "\n"
+
+
+def base_plants() -> list[tuple[str, dict]]:
+    return [(p.stem, tomllib.loads(p.read_text())) for p in PLANTS]
+
+
+# --------------------------------------------------------------------------- running
+
+
+class _Hang(BaseException):
+    pass
+
+
+def _alarm(signum, frame):
+    raise _Hang()
+
+
+def classify(command: str, text: str, workdir: str, timeout: float = 60.0) -> tuple[str, str]:
+    """Run ``dnasim check`` or ``dnasim run`` (t_end 0.5 s) on ``text``; returns
+    (outcome, output)."""
+    from click.testing import CliRunner
+
+    from dnasim.cli import main
+
+    path = os.path.join(workdir, "fuzz.toml")
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text)
+    args = [command, path]
+    if command == "run":
+        args += ["-o", os.path.join(workdir, "out"), "-q", "--t-end", "0.5 s"]
+    old = signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        res = CliRunner().invoke(main, args, catch_exceptions=True)
+    except _Hang:
+        return "hang", ""
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    out = res.output
+    if isinstance(res.exception, _Hang):
+        return "hang", out
+    if res.exception is not None and not isinstance(res.exception, SystemExit):
+        return "traceback", f"{type(res.exception).__name__}: {res.exception}"
+    if "Traceback" in out:
+        return "traceback", out
+    if "internal error" in out:
+        return "internal", out
+    if res.exit_code == 0:
+        return "clean", out
+    if res.exit_code == 1:
+        return "ok", out
+    if res.exit_code == 2 and (path in out or "fuzz.toml" in out or "option" in out):
+        return "ok", out
+    return "unlocated", out
+
+
+def _case(seed: int, run_fraction: float, bases) -> tuple[str, str]:
+    rnd = random.Random(seed)
+    _, data = bases[rnd.randrange(len(bases))]
+    text = mutate(data, rnd)
+    command = "run" if rnd.random() < run_fraction else "check"
+    return command, text
+
+
+def _chunk(args) -> list[tuple[int, str, str, str]]:
+    seeds, run_fraction, timeout = args
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))  # a runaway case fails alone
+    bases = base_plants()
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for seed in seeds:
+            command, text = _case(seed, run_fraction, bases)
+            outcome, msg = classify(command, text, tmp, timeout)
+            out.append((seed, command, outcome, msg.strip().splitlines()[-1][:300] if msg else ""))
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--n", type=int, default=10_000, help="number of mutated plants")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes")
+    ap.add_argument("--run-fraction", type=float, default=0.05, help="share run, not check")
+    ap.add_argument("--timeout", type=float, default=60.0, help="seconds before a hang")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--show", type=int, default=5, help="examples printed per bad outcome")
+    args = ap.parse_args(argv)
+    seeds = list(range(args.seed, args.seed + args.n))
+    chunks = [seeds[i : i + 100] for i in range(0, len(seeds), 100)]
+    tally: Counter = Counter()
+    commands: Counter = Counter()
+    examples: dict[str, list] = {}
+    t0 = time.perf_counter()
+    pending = list(chunks)
+    while pending:
+        with ProcessPoolExecutor(args.jobs) as pool:
+            futures = [
+                (c, pool.submit(_chunk, (c, args.run_fraction, args.timeout))) for c in pending
+            ]
+            pending = []
+            for c, fut in futures:
+                try:
+                    rows = fut.result()
+                except BrokenProcessPool:
+                    # a worker died: count its chunk as crashes (not re-run: it may die again)
+                    tally["crash"] += len(c)
+                    examples.setdefault("crash", []).append((c[0], "?", f"seeds {c[0]}..{c[-1]}"))
+                    continue
+                for seed, command, outcome, msg in rows:
+                    tally[outcome] += 1
+                    commands[command] += 1
+                    if outcome not in ("clean", "ok"):
+                        examples.setdefault(outcome, []).append((seed, command, msg))
+    wall = time.perf_counter() - t0
+    for outcome, items in examples.items():
+        print(f"{outcome}: {len(items)} (first {min(len(items), args.show)}):")
+        for seed, command, msg in items[: args.show]:
+            print(f"  seed {seed} ({command}): {msg}")
+    print(
+        f"{sum(tally.values())} mutated plants ({commands['check']} check, {commands['run']} run) "
+        f"in {wall:.0f} s with {args.jobs} processes"
+    )
+    print(" / ".join(f"{o} {tally[o]}" for o in OUTCOMES))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,455 @@
+"""Faults and bad input (issue 12): nothing stale, nothing torn, nothing unbounded,
+every failure located. One test (or a small group) per item of the issue."""
+
+from __future__ import annotations
+
+import errno
+import os
+import resource
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from dnasim.cli import main
+from dnasim.errors import OutputError
+from dnasim.output import RESULT_FILES, StreamingCSV, read_results_csv
+
+ROOT = Path(__file__).resolve().parents[1]
+PLANTS = ROOT / "plants"
+AIR = (PLANTS / "air_pipe.toml").read_text()
+ATT = (PLANTS / "attemperator.toml").read_text()
+DNASIM = [sys.executable, "-m", "dnasim.cli"]
+
+
+def invoke(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=True)
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception  # a Python traceback is a bug
+    return result
+
+
+def plant(tmp_path, text, name="p.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def assert_located(result, *words):
+    """Exit 2, one message naming the place, no internal error."""
+    assert result.exit_code == 2, result.output
+    assert "internal error" not in result.output
+    assert "Traceback" not in result.output
+    for w in words:
+        assert w in result.output, (w, result.output)
+
+
+# --------------------------------------------------------------------------- 1. output files
+
+
+def test_previous_results_are_removed_before_a_run_that_fails(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in RESULT_FILES:
+        (out / name).write_text("stale\n")
+    bad = plant(tmp_path, AIR.replace('V = "0.5 m3"', 'V = "0.5 furlong"'))
+    res = invoke("run", bad, "-o", out, "-q")
+    assert_located(res, "furlong")
+    assert sorted(os.listdir(out)) == []
+
+
+def test_previous_results_are_removed_when_the_run_fails_before_its_first_row(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "results.csv").write_text("time [s]\n1.0\n")
+    (out / "steps.csv").write_text("time,step_size,order\n1.0,1.0,1\n")
+    # a valid file whose start cannot be computed: the run fails while starting
+    text = AIR.replace('p = "1.5 bar"', "p = 1e30")
+    res = invoke("run", plant(tmp_path, text), "-o", out, "-q", "--t-end", "1 s")
+    assert res.exit_code in (1, 2) and "internal error" not in res.output
+    assert not (out / "results.csv").exists()
+    steps = (out / "steps.csv").read_text() if (out / "steps.csv").exists() else ""
+    assert "1.0,1.0,1" not in steps
+
+
+def test_symlinks_planted_in_the_output_directory_are_not_followed(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    outside = tmp_path / "precious.txt"
+    outside.write_text("keep me\n")
+    for name in ("results.csv", "events.csv", "steps.csv", "variables.png"):
+        (out / name).symlink_to(outside)
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", out, "-q", "--t-end", "10 s", "--plot")
+    assert res.exit_code == 0, res.output
+    assert outside.read_text() == "keep me\n"
+    for name in ("results.csv", "events.csv", "steps.csv", "variables.png"):
+        assert not (out / name).is_symlink() and (out / name).is_file()
+
+
+def test_streaming_csv_never_opens_an_existing_file_or_link(tmp_path):
+    target = tmp_path / "elsewhere.csv"
+    target.write_text("keep\n")
+    link = tmp_path / "results.csv"
+    link.symlink_to(target)
+    with pytest.raises(OutputError, match="results.csv"):
+        StreamingCSV(link, ["time [s]"])
+    assert target.read_text() == "keep\n"
+
+
+def test_results_csv_being_a_directory_is_a_located_error(tmp_path):
+    out = tmp_path / "out"
+    (out / "results.csv").mkdir(parents=True)
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", out, "-q", "--t-end", "1 s")
+    assert_located(res, "results.csv", "is a directory")
+
+
+def test_disk_full_truncates_to_the_last_whole_row(tmp_path, monkeypatch):
+    """ENOSPC injected into the writer: half a block reaches the disk, then the error."""
+    import dnasim.output as output
+
+    path = tmp_path / "r.csv"
+    w = StreamingCSV(path, ["time [s]", "x [K]"], flush_rows=4, flush_seconds=1e9)
+    for i in range(4):
+        w.write_row([float(i), 300.0 + i])  # 4 rows flushed
+    real_write = os.write
+
+    def full(fd, data):
+        real_write(fd, bytes(data[: len(data) // 2]))  # a torn block, then the disk is full
+        monkeypatch.setattr(output.os, "write", failing)
+        return len(data) // 2
+
+    def failing(fd, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(output.os, "write", full)
+    with pytest.raises(OutputError) as info:
+        for i in range(4, 8):
+            w.write_row([float(i), 300.0 + i])
+    monkeypatch.setattr(output.os, "write", real_write)
+    err = info.value
+    assert "r.csv" in str(err) and "disk is full" in str(err) and "t = 3 s" in str(err)
+    assert err.t_reached == 3.0 and err.rows == 4
+    text = path.read_text()
+    assert text.endswith("\n") and len(text.splitlines()) == 1 + 4
+    w.close()  # closing after the failure is harmless
+
+
+def _limit_file_size(nbytes):
+    def preexec():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+
+    return preexec
+
+
+def test_file_size_limit_in_a_real_process_is_an_environment_error(tmp_path):
+    """RLIMIT_FSIZE (no root needed): results.csv (676 kB for the whole run) hits the
+    300 kB limit; steps.csv (about 20 kB) and events.csv still fit."""
+    out = tmp_path / "out"
+    proc = subprocess.run(
+        [*DNASIM, "run", str(PLANTS / "attemperator.toml"), "-o", str(out), "-q"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=_limit_file_size(300_000),
+        cwd=ROOT,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert "internal error" not in proc.stderr and "Traceback" not in proc.stderr
+    assert "results.csv" in proc.stderr and "file size limit" in proc.stderr
+    assert "t = " in proc.stderr
+    text = (out / "results.csv").read_text()
+    assert text.endswith("\n")
+    names, _, data = read_results_csv(out / "results.csv")
+    assert len(data["time"]) > 1
+    assert (out / "events.csv").exists() and (out / "steps.csv").exists()
+
+
+# --------------------------------------------------------------------------- 2. units
+
+
+@pytest.mark.parametrize(
+    "value, words",
+    [
+        ('"0.02 degC"', ["absolute temperature", "1/temperature", "'0.02 1/K'"]),
+        ('"0.02 K"', ["temperature", "1/temperature"]),
+        ('"0.02 degF"', ["absolute temperature"]),
+    ],
+)
+def test_controller_gain_accepts_only_inverse_temperature(tmp_path, value, words):
+    res = invoke("check", plant(tmp_path, ATT.replace('Kp = "0.02 1/K"', f"Kp = {value}")))
+    assert_located(res, "[components.pi]", "key 'Kp'", *words)
+
+
+def test_controller_gain_in_inverse_temperature_is_read_per_kelvin():
+    from dnasim.plantfile import loads
+
+    for text, kp in (('"0.02 1/K"', 0.02), ('"0.02 1/degC"', 0.02), ('"0.01 1/degF"', 0.018)):
+        spec = loads(ATT.replace('Kp = "0.02 1/K"', f"Kp = {text}")).spec
+        pi = next(c for c in spec.components if c.name == "pi")
+        # 1e-15: one rounding of the degF scale 5/9
+        assert pi.params["Kp"] == pytest.approx(kp, rel=1e-15)
+
+
+def test_temperature_difference_refuses_degC(tmp_path):
+    text = AIR.replace("n_volumes = 1", 'n_volumes = 1\ndT_reg = "2 degC"')
+    res = invoke("check", plant(tmp_path, text))
+    assert_located(res, "key 'dT_reg'", "temperature difference", "'2 K'", "delta_degC")
+    from dnasim.plantfile import loads
+
+    for ok in ('"2 K"', '"2 delta_degC"', "2"):
+        spec = loads(AIR.replace("n_volumes = 1", f"n_volumes = 1\ndT_reg = {ok}")).spec
+        pipe = next(c for c in spec.components if c.name == "pipe")
+        assert pipe.params["dT_reg"] == 2.0  # exact: scale 1, no offset
+
+
+# --------------------------------------------------------------------------- 3. limits
+
+
+@pytest.mark.parametrize(
+    "old, new, words",
+    [
+        ("n_volumes = 1", "n_volumes = 1000000000", ["n_volumes = 1e+09", "limit of 1000"]),
+        ("n_volumes = 1", "n_volumes = 1e5", ["n_volumes = 100000", "limit of 1000"]),
+    ],
+)
+def test_counts_have_an_upper_limit(tmp_path, old, new, words):
+    res = invoke("check", plant(tmp_path, AIR.replace(old, new)))
+    assert_located(res, "[components.pipe]", *words)
+
+
+def test_splitter_outlets_have_an_upper_limit(tmp_path):
+    text = (
+        (PLANTS / "superheater_line.toml").read_text().replace("n_outlets = 2", "n_outlets = 5000")
+    )
+    res = invoke("check", plant(tmp_path, text))
+    assert_located(res, "key 'n_outlets'", "n_outlets = 5000", "limit of 64")
+
+
+def test_output_points_are_capped_before_the_grid_exists(tmp_path):
+    import tracemalloc
+
+    from dnasim.errors import PlantError
+    from dnasim.plantfile import loads
+
+    text = AIR.replace('t_end = "30 min"', 't_end = 1e9\noutput_interval = "1 s"')
+    tracemalloc.start()
+    with pytest.raises(PlantError, match=r"output_interval.*1e\+09 output points.*1e\+07"):
+        loads(text)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 50e6  # the grid would be 8 GB; the whole check needs a few MB
+    res = invoke("check", plant(tmp_path, text))
+    assert_located(res, "[simulation]", "key 'output_interval'")
+
+
+def test_max_steps_from_the_file_and_from_the_command_line(tmp_path):
+    text = AIR.replace('t_end = "30 min"', 't_end = "30 min"\nmax_steps = 5')
+    res = invoke("run", plant(tmp_path, text), "-o", tmp_path / "a", "-q")
+    assert res.exit_code == 1 and "5" in res.output and "steps" in res.output
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", tmp_path / "b", "-q", "--max-steps", "7")
+    assert res.exit_code == 1 and "7" in res.output
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", tmp_path / "c", "--max-steps", "0")
+    assert_located(res, "--max-steps")
+
+
+def test_streaming_run_keeps_no_rows_in_memory(tmp_path):
+    from dnasim.plantfile import load
+    from dnasim.runner import run_plant
+
+    outcome = run_plant(load(PLANTS / "air_pipe.toml"), tmp_path / "o", flush_rows=10)
+    assert outcome.success and outcome.rows > 10
+    assert outcome.result.y is None and outcome.result.sol is None
+    kept = run_plant(load(PLANTS / "air_pipe.toml"), tmp_path / "k", keep_rows=True)
+    assert kept.result.y.shape[1] == kept.rows
+
+
+# --------------------------------------------------------------------------- 4. located messages
+
+
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("x = " + "[" * 1000 + "]" * 1000 + "\n" + AIR, ["nested too deeply", "p.toml"]),
+        (AIR.replace('V = "0.5 m3"', 'V = "0.5 m^(1/0)"'), ["key 'V'", "divides by zero"]),
+        (AIR.replace('V = "0.5 m3"', 'V = "0.5 m^999"'), ["key 'V'", "out of range"]),
+        (
+            AIR.replace('V = "0.5 m3"', 'V = "0.5 ' + "(" * 500 + "m3" + ")" * 500 + '"'),
+            ["key 'V'"],
+        ),
+        (
+            AIR.replace('t_end = "30 min"', 't_end = "30 min"\noutput_interval = "1e-300 s"'),
+            ["key 'output_interval'", "limit"],
+        ),
+        (
+            ATT.replace('measured = "sensor.T"', 'measured = "sensr.T"'),
+            ["no component named 'sensr'", "did you mean 'sensor'"],
+        ),
+        (
+            ATT.replace('inputs = { z = "pi.z" }', 'opening = 0.5\ninputs = { z = "pi.z" }'),
+            ["both the parameter 'opening' and the signal input 'z'"],
+        ),
+        (
+            ATT.replace('inputs = { z = "pi.z" }', 'inputs = { z = "sensor.T" }'),
+            ["dimension mismatch", "'sensor.T' is a temperature signal", "dimensionless"],
+        ),
+    ],
+    ids=[
+        "toml-1000-deep",
+        "exp-1-0",
+        "exp-999",
+        "parens",
+        "interval",
+        "dangling",
+        "both",
+        "T-to-z",
+    ],
+)
+def test_bad_input_is_located(tmp_path, text, words):
+    res = invoke("check", plant(tmp_path, text))
+    assert_located(res, *words)
+
+
+def test_a_dangling_signal_is_the_only_error_reported(tmp_path):
+    text = ATT.replace('measured = "sensor.T"', 'measured = "sensr.T"')
+    res = invoke("check", plant(tmp_path, text))
+    assert res.output.count(".toml,") == 1, res.output  # one paragraph, no unit follow-ons
+
+
+def test_boundary_far_outside_the_medium_range_is_located(tmp_path):
+    text = ATT.replace('T = "200 degC"', 'T = "5000 degC"')
+    res = invoke("run", plant(tmp_path, text), "-o", tmp_path / "o", "-q", "--t-end", "1 s")
+    assert_located(res, "5000 degC")
+
+
+@pytest.mark.parametrize("value", ["inf", "nan", "-1", "0"])
+def test_atol_must_be_finite_and_positive(tmp_path, value):
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", tmp_path, "--atol", value)
+    assert_located(res, "--atol")
+
+
+def test_sigterm_while_starting_exits_with_a_message(tmp_path):
+    proc = subprocess.Popen(
+        [*DNASIM, "run", str(PLANTS / "attemperator.toml"), "-o", str(tmp_path), "-q"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_DFL),
+    )
+    # after Python itself has started (about 0.2 s, the one window where SIGTERM still
+    # kills silently), while numpy, CoolProp and the plant load or the run starts
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 1, (proc.returncode, err)
+    assert "interrupted" in err and "SIGTERM" in err and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------- 5. CoolProp tables
+
+
+def test_tabular_medium_is_announced_before_its_tables_are_built(tmp_path, monkeypatch):
+    import CoolProp.CoolProp as CP
+
+    import dnasim.media as media
+
+    order = []
+    real = media.get_medium
+
+    def fake_get_medium(name, *a, **k):
+        order.append(("build", name))
+        if "BICUBIC" in name.upper():
+            return real("Water")  # the same fluid, without 15 s of table building
+        return real(name, *a, **k)
+
+    import dnasim.cli as cli
+
+    real_notice = cli._tabular_notice
+
+    def notice(name):
+        order.append(("notice", name))
+        real_notice(name)
+
+    monkeypatch.setattr(media, "get_medium", fake_get_medium)
+    monkeypatch.setattr(cli, "_tabular_notice", notice)
+    old = CP.get_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY)
+    try:
+        text = ATT.replace('medium = "Water"', 'medium = "BICUBIC&HEOS::Water"')
+        res = invoke("check", plant(tmp_path, text), "--coolprop-cache", tmp_path / "cp")
+        assert "BICUBIC&HEOS::Water" in res.output and "tables" in res.output
+        assert str((tmp_path / "cp").resolve()) in res.output
+        assert CP.get_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY) == os.path.join(
+            (tmp_path / "cp").resolve(), ""
+        )
+        kinds = [k for k, name in order if "BICUBIC" in name.upper()]
+        assert kinds[:2] == ["notice", "build"]
+    finally:
+        CP.set_config_string(CP.ALTERNATIVE_TABLES_DIRECTORY, old)
+
+
+def test_an_unknown_component_type_hides_its_follow_on_errors(tmp_path):
+    """Without the attemperator its nodes have one port each: that follows from the
+    misspelt type and is not reported again."""
+    res = invoke("check", plant(tmp_path, ATT.replace('"Attemperator"', '"Attemperatr"')))
+    assert_located(res, "unknown component type 'Attemperatr'", "did you mean 'Attemperator'")
+    assert res.output.count(".toml,") == 1, res.output
+
+
+def test_small_tables_on_a_full_disk_leave_no_partial_file(tmp_path, monkeypatch):
+    """events.csv/steps.csv go through a temporary file: ENOSPC while writing it leaves
+    neither a torn table nor the temporary file, and names the table."""
+    import dnasim.output as output
+    from dnasim.output import write_steps_csv
+
+    class Full:
+        def __init__(self, f):
+            self.f = f
+
+        def write(self, data):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def __getattr__(self, name):
+            return getattr(self.f, name)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.f.close()
+
+    real_fdopen = os.fdopen
+    monkeypatch.setattr(output.os, "fdopen", lambda fd, mode: Full(real_fdopen(fd, mode)))
+    with pytest.raises(OutputError, match=r"steps\.csv: the disk is full"):
+        write_steps_csv(tmp_path / "steps.csv", [(1.0, 0.1, 2)])
+    assert os.listdir(tmp_path) == []
+
+
+def test_plot_into_a_missing_directory_is_bad_input(tmp_path):
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", tmp_path / "o", "-q", "--t-end", "5 s")
+    assert res.exit_code == 0
+    res = invoke("plot", tmp_path / "o" / "results.csv", "-o", tmp_path / "nowhere" / "x.png")
+    assert_located(res, "x.png")
+
+
+@pytest.mark.skipif(
+    not os.environ.get("DNASIM_TABULAR_TESTS"),
+    reason="building CoolProp tables takes 15-30 s; set DNASIM_TABULAR_TESTS=1",
+)
+def test_coolprop_tables_go_to_the_cache_directory(tmp_path):
+    text = ATT.replace('medium = "Water"', 'medium = "BICUBIC&HEOS::Water"')
+    cache = tmp_path / "cp"
+    proc = subprocess.run(
+        [*DNASIM, "check", str(plant(tmp_path, text)), "--coolprop-cache", str(cache)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "note:" in proc.stderr and str(cache.resolve()) in proc.stderr
+    assert any(p.name.endswith(".bin.z") for p in cache.rglob("*"))
