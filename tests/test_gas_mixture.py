@@ -201,7 +201,7 @@ def test_mixture_is_the_mass_weighted_sum(flue):
 def test_flue_gas_cp_against_coolprop_ideal_mixture(flue):
     # CoolProp's ideal-gas parts, mass-weighted (an ideal mixture has no excess cp).
     # Tolerance 4e-3: the species agree to 1.4e-3 below 1000 K and 4e-3 above except
-    # H2O (1 %, see above), which is 11 % of the mass here; measured 3.1e-3 (1500 K)
+    # H2O (1 %, see above), which is 11 % of the mass here; measured 3.1e-3
     Ts = np.linspace(300.0, 2000.0, 18)
     w = flue.mass_fractions
     cp_ref = sum(

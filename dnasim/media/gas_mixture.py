@@ -9,9 +9,10 @@ Glenn 7-coefficient polynomials (two ranges, 200 K..1000 K and 1000 K..6000 K)::
 
 (T in K, R_u = 8.314462618 J/(mol K); S° at the standard pressure p° = 1 bar). Data:
 McBride, Zehe & Gordon, NASA/TP-2002-211556, in the 7-coefficient form of Burcat's
-"Third Millennium Ideal Gas and Condensed Phase Thermochemical Database" (the
-200-1000-6000 K records N2 "G 8/02", O2 "RUS 89", CO2 "L 7/88", H2O "L 8/89", Ar
-"L 6/88"; the low-range coefficients are those of the GRI-Mech 3.0 ``thermo30.dat``).
+"Third Millennium Ideal Gas and Condensed Phase Thermochemical Database" (its
+200-1000-6000 K records: N2 "G 8/02", O2 "RUS 89", CO2 "L 7/88", H2O "L 8/89", Ar; the
+low-range sets of O2, CO2 and H2O are also those of GRI-Mech 3.0's ``thermo30.dat``,
+whose 300-5000 K N2 and Ar records are older fits not used here).
 Transcribed in :data:`SPECIES` below. These 7-coefficient refits reproduce the cp of
 their parent, the 9-coefficient form of NASA/TP-2002-211556, to 0.41 % or better over
 200..6000 K (CO2 near 1260 K worst), and agree with JANAF and CoolProp's ideal-gas parts
@@ -58,7 +59,8 @@ leaves an error of order 1e-18 T (quadratic convergence), i.e. T to an ulp or tw
 **Range.** 200 K <= T <= 6000 K (the range of the fits) and p > 0. Outside,
 :class:`PropertyError` naming the state and the limit. The gas is ideal (Z = 1): for the
 dilute flue gas at boiler pressures (about 1 bar) the real-gas departure is well below
-1 %; pure steam or CO2 at 10 bar near saturation would be some % off.
+1 % (its water vapour at the dew point: Z = 0.995), but pure steam at 10 bar near
+saturation has Z = 0.935 and CO2 at 10 bar and 300 K Z = 0.95 (CoolProp).
 
 Use::
 
@@ -114,7 +116,7 @@ class Species:
 
 # NASA Glenn 7-coefficient polynomials, 200-1000-6000 K (McBride, Zehe & Gordon 2002,
 # NASA/TP-2002-211556, as tabulated in Burcat's database; see the module docstring).
-# Molar masses [kg/mol] from the same records (IUPAC atomic weights).
+# Molar masses [kg/mol] as in NASA/TP-2002-211556 (IUPAC atomic weights).
 SPECIES: dict[str, Species] = {
     "N2": Species(
         28.0134e-3,
@@ -186,7 +188,7 @@ FLUE_GAS_DEFAULT = methane_flue_gas(1.15)
 _SPECIES_KEYS = {k.lower(): k for k in SPECIES}
 
 
-def _poly_sets(x: dict[str, float]) -> tuple[np.ndarray, float, float]:
+def _poly_sets(x: dict[str, float]) -> tuple[np.ndarray, float]:
     """Mixture coefficients (2 x 7, mole-fraction weighted a_k, in units of R_u) and M."""
     a = np.zeros((2, 7))
     M = 0.0
