@@ -19,6 +19,9 @@ no cache can hit): "liquid" 1 MPa / 400 kJ/kg, "two-phase" 1 MPa / 1500 kJ/kg,
 "plant mix": 1000 states spread over a boiling pipe at 10, 60 and 190 bar (liquid,
 two-phase, vapour in equal parts). Best of 3 repetitions (the machine may be shared),
 ``time.process_time`` (CPU time). Table 2: one-off costs (import, first compiled call).
+Table 3: the flue gas, :class:`dnasim.media.GasMixture` (``get_medium("FlueGas")``, NASA
+polynomials, numpy): ``states`` on n states from 300 K to 2000 K at 1 bar (one call),
+and n calls of the scalar ``state(p, h)`` (cache missed), CPU us per state.
 """
 
 from __future__ import annotations
@@ -157,7 +160,38 @@ def main() -> None:
     print(f"one-off CPU s: import kernels {t_import:.2f}, first compiled call {t_first:.2f}")
     print("(numba's cache in __pycache__; without it the first call compiles), old medium load")
     print(f"incl. CoolProp import {t_old_load:.2f}")
+    print()
+    flue_gas_table(sizes)
     sys.stdout.flush()
+
+
+def flue_gas_table(sizes) -> None:
+    """Table 3: CPU us per state of the flue gas (GasMixture), arrays and scalar calls."""
+    from dnasim.media import get_medium
+
+    gas = get_medium("FlueGas")
+    print("flue gas (GasMixture, NASA7, numpy): CPU us per state, 300..2000 K at 1 bar")
+    head = f"{'n':>7s}{'states':>10s}{'state 1x1':>11s}"
+    print(head)
+    print("-" * len(head))
+    for n in sizes:
+        p = np.full(n, 1e5)
+        h = gas.h_T(np.linspace(300.0, 2000.0, n)) + 1e-3 * np.arange(n)
+        pl, hl = p.tolist(), h.tolist()
+        reps = max(1, 2000 // n)
+
+        def run_states():
+            for _ in range(reps):
+                gas.states(p, h)
+
+        def run_scalar():
+            for _ in range(reps):
+                gas.cache_clear()
+                for pi, hi in zip(pl, hl, strict=True):
+                    gas.state(pi, hi)
+
+        per = 1e6 / (reps * n)
+        print(f"{n:7d}{best(run_states) * per:10.2f}{best(run_scalar) * per:11.2f}")
 
 
 if __name__ == "__main__":

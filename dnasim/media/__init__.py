@@ -7,6 +7,9 @@
     air = get_medium("Air")                       # constant-cp ideal gas
     air_real = get_medium("Air", backend="HEOS")  # CoolProp's real-gas air
     r134a = get_medium("R134a", backend="HEOS")   # any CoolProp fluid
+    flue = get_medium("FlueGas")                  # N2/O2/CO2/H2O/Ar ideal mixture, NASA cp(T)
+    gas = GasMixture("Exhaust", mole_fractions={"N2": 0.75, "O2": 0.14, "CO2": 0.05,
+                                                "H2O": 0.05, "Ar": 0.01})
     st = water.state(1e5, 4.2e5)                  # -> FluidState (cached)
     sts = water.states(p_array, h_array)          # -> FluidStates (arrays, one call)
     water.saturation_enthalpies(p_array)          # -> (h_liq, h_vap) arrays
@@ -20,12 +23,14 @@ property. CoolProp is imported only when a CoolProp medium is requested.
 Modules: ``state`` (FluidState, FluidStates), ``errors`` (PropertyError),
 ``base`` (Medium and its cache), ``if97`` (water by IF97, on ``if97_kernel``,
 the vectorised IAPWS-IF97 kernel, with ``if97_coefficients``), ``coolprop_medium``
-(HEOS and tabular CoolProp backends), ``ideal_gas`` (IdealGas), ``registry``
+(HEOS and tabular CoolProp backends), ``ideal_gas`` (IdealGas), ``gas_mixture``
+(GasMixture: NASA-polynomial ideal-gas mixtures, flue gas), ``registry``
 (get_medium and fluid names).
 """
 
 from dnasim.media.base import Medium
 from dnasim.media.errors import PropertyError
+from dnasim.media.gas_mixture import GasMixture
 from dnasim.media.ideal_gas import IdealGas
 from dnasim.media.if97 import IF97Water
 from dnasim.media.registry import BACKENDS, canonical_fluid_name, get_medium
@@ -46,6 +51,7 @@ __all__ = [
     "CoolPropMedium",
     "FluidState",
     "FluidStates",
+    "GasMixture",
     "IF97Water",
     "IdealGas",
     "Medium",

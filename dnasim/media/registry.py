@@ -9,7 +9,7 @@ from dnasim.errors import PlantError
 from dnasim.media.base import BACKEND_ERRORS, Medium
 
 #: Backends accepted by :func:`get_medium` (case-insensitive).
-BACKENDS = ("IF97", "HEOS", "BICUBIC&HEOS", "TTSE&HEOS", "IdealGas")
+BACKENDS = ("IF97", "HEOS", "BICUBIC&HEOS", "TTSE&HEOS", "IdealGas", "NASA7")
 _BACKEND_KEYS = {b.lower(): b for b in BACKENDS}
 _BACKEND_KEYS.update({"ideal": "IdealGas", "ideal_gas": "IdealGas", "ideal-gas": "IdealGas"})
 
@@ -108,10 +108,14 @@ def get_medium(fluid: str, backend: str | None = None) -> Medium:
         A CoolProp fluid name or alias, case-insensitive (``"Water"``,
         ``"water"``, ``"H2O"``, ``"R134a"``, ``"Air"``, ...), optionally with a
         CoolProp-style backend prefix (``"IF97::Water"``, ``"HEOS::Water"``,
-        ``"BICUBIC&HEOS::Water"``).
+        ``"BICUBIC&HEOS::Water"``), or an ideal-gas mixture of N2, O2, CO2, H2O, Ar:
+        ``"FlueGas"`` (natural-gas flue gas, :data:`~dnasim.media.gas_mixture.
+        FLUE_GAS_DEFAULT`) or ``"FlueGas[N2=0.72,CO2=0.13,H2O=0.11,O2=0.03,Ar=0.01]"``
+        (mole fractions), both :class:`~dnasim.media.GasMixture` with backend ``"NASA7"``.
     backend : str, optional
         ``"IF97"`` (water only), ``"HEOS"``, ``"BICUBIC&HEOS"``, ``"TTSE&HEOS"``
-        or ``"IdealGas"`` (air only). Defaults: ``"IF97"`` for water,
+        ``"IdealGas"`` (air only) or ``"NASA7"`` (gas mixtures only). Defaults:
+        ``"IF97"`` for water,
         ``"IdealGas"`` for air (constant-cp ideal gas,
         :class:`~dnasim.media.IdealGas` with R = 287.05 J/(kg K),
         cp = 1006 J/(kg K)), ``"HEOS"`` for every other fluid.
@@ -139,6 +143,18 @@ def get_medium(fluid: str, backend: str | None = None) -> Medium:
                 f"fluid {fluid!r} names backend {prefix_b!r} but backend={backend!r} was given"
             )
         backend = prefix_b
+    from dnasim.media.gas_mixture import gas_mixture_from_name, is_gas_mixture_name
+
+    if is_gas_mixture_name(name):  # "FlueGas", "FlueGas[N2=0.72,...]": NASA7 mixtures
+        if backend is not None and _canonical_backend(backend) != "NASA7":
+            raise PlantError(
+                f"fluid {fluid!r} is an ideal-gas mixture (backend 'NASA7'), not {backend!r}"
+            )
+        mix = gas_mixture_from_name(name)
+        medium = _INSTANCES.get((mix.name, "NASA7"))
+        if medium is None:
+            medium = _INSTANCES[(mix.name, "NASA7")] = mix
+        return medium
     canon = canonical_fluid_name(name)
     if backend is None:
         b = {"Water": "IF97", "Air": "IdealGas"}.get(canon, "HEOS")
@@ -153,6 +169,11 @@ def get_medium(fluid: str, backend: str | None = None) -> Medium:
 
 
 def _create(canon: str, backend: str) -> Medium:
+    if backend == "NASA7":
+        raise PlantError(
+            f"backend 'NASA7' covers only the ideal-gas mixtures 'FlueGas' and "
+            f"'FlueGas[N2=...,O2=...,CO2=...,H2O=...,Ar=...]' (mole fractions), not {canon!r}"
+        )
     if backend == "IF97":
         if canon != "Water":
             raise PlantError(f"backend 'IF97' covers only water, not {canon!r}; use backend='HEOS'")
