@@ -119,6 +119,18 @@ def lmtd(dT_a, dT_b, dT_reg):
     return logarithmic_mean(a_pos, b_pos) - logarithmic_mean(a_neg, b_neg)
 
 
+#: default friction regularisation flow m_reg = M_REG_REL * m_nominal. Below m_reg
+#: the friction law turns linear (laminar-like). It must not be much smaller: at
+#: zero flow the slope d(dp)/dm = k m_reg/rho is all that ties a face's flow to
+#: the pressures, and pressures are resolved only to about rtol * p; with 1e-4
+#: m_nominal (the former default) a steam pipe's face flows were undetermined by
+#: tens of kg/s at a flow reversal and Newton failed. ThermoPower uses the same
+#: order (its "wnf", fraction of nominal flow where linear friction equals
+#: turbulent friction, 0.01 to 0.02). At m_nominal the law differs from
+#: k m|m|/rho by (m_reg/m)^2/2 = 5e-5.
+M_REG_REL = 1e-2
+
+
 def friction_dp(k, m, rho, m_reg):
     """Friction pressure drop k m sqrt(m^2 + m_reg^2) / rho [Pa].
 
