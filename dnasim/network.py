@@ -1,9 +1,11 @@
 """The plant: components wired through named nodes (DNA's network view).
 
-Nodes carry the pressure p [Pa] and the specific enthalpy h [J/kg]; components
-carry the mass flows. A node has no volume: its equations are the mass balance
-(sum of flows in = sum of flows out) and the enthalpy fixed by the one
-component whose outlet port is attached to it. Signal ports are linked output to
+Nodes carry the pressure p [Pa] and the specific enthalpy h [J/kg] of the
+fluid flowing into them (mixed); components carry the mass flows. A node has
+no volume: its equations are the mass balance (sum of flows in = sum of flows
+out) and the mixing equation, which makes h the flow-weighted mean of the
+enthalpies the components deliver into the node (upwind by the actual flow, in
+either direction; see ``dnasim.assembly``). Signal ports are linked output to
 input. The plant is held as a networkx multigraph (``Plant.graph``) with one
 vertex per component ("component", name) and per node ("node", name).
 
