@@ -42,11 +42,26 @@ def test_valve_closes_fully_stays_shut_and_reopens():
     assert err_M < 1e-6 * thr_M and err_E < 1e-6 * thr_E
 
 
-def test_inlet_valve_closes_fully_and_the_line_drains():
+@pytest.mark.parametrize(
+    "volumes, exclude_algebraic",
+    [
+        (3, False),
+        # with 5 volumes the dnasim solver stops at 10.52 s when the algebraic flows
+        # stay in the error test (the line's flows near zero are set by pressure
+        # differences below the pressures' tolerance; IDA finishes); without them
+        # it runs to the end
+        (5, True),
+    ],
+)
+def test_inlet_valve_closes_fully_and_the_line_drains(volumes, exclude_algebraic):
     # the node between the closed valve and the line carries (almost) no flow: its
     # pressure is tied only by the line's friction, its enthalpy is the mixed
     # state of the nearly stagnant fluid on both sides
-    plant, res = run_file("inlet_valve_close_reopen.toml")
+    plant, res = run_file(
+        "inlet_valve_close_reopen.toml",
+        {"n_volumes = 3": f"n_volumes = {volumes}"},
+        exclude_algebraic_from_error=exclude_algebraic,
+    )
     assert res.success, res.message
     t, m = res.t, res["inlet_valve.m"]
     before = m[np.searchsorted(t, 9.99)]

@@ -192,12 +192,12 @@ def test_sink_without_temperature_stops_at_reverse_inflow():
     # the sink pressure ramps 39.5 -> 40.5 bar over 10..20 s; the valve's flow turns
     # when it passes the pipe outlet's pressure (a little below the source's 40 bar,
     # which the sink passes at 15 s, while the pipe still fills from the source)
-    assert 14.0 < t_stop < 15.0, t_stop
-    assert res["n_sink.p"][-1] > res["n_out.p"][-1] and res["n_sink.p"][-1] < 40e5
+    assert 14.0 < t_stop < 16.0, t_stop
+    assert res["n_sink.p"][-1] > res["n_out.p"][-1]
     assert f"t = {t_stop:.6g}" in res.message
-    # the terminal switch stopped it where the inflow reached its threshold, 1e-6
-    # of m_nominal (5 kg/s), well before the flow grew
-    assert 0.0 < res["sink.m"][-1] < 1e-5
+    # the terminal switch stopped it where the inflow reached its threshold, 1e-3
+    # of m_nominal (5 kg/s), located to the switch tolerance
+    assert abs(res["sink.m"][-1] - 5e-3) < 1e-9
 
 
 def test_mass_flow_sink_takes_negative_flow():
