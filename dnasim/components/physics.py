@@ -119,6 +119,18 @@ def lmtd(dT_a, dT_b, dT_reg):
     return logarithmic_mean(a_pos, b_pos) - logarithmic_mean(a_neg, b_neg)
 
 
+#: default friction regularisation flow m_reg = M_REG_REL * m_nominal. Below m_reg
+#: the friction law turns linear (laminar-like). It must not be much smaller: at
+#: zero flow the slope d(dp)/dm = k m_reg/rho is all that ties a face's flow to
+#: the pressures, and pressures are resolved only to about rtol * p; with 1e-4
+#: m_nominal (the former default) a steam pipe's face flows were undetermined by
+#: tens of kg/s at a flow reversal and Newton failed. ThermoPower uses the same
+#: order (its "wnf", fraction of nominal flow where linear friction equals
+#: turbulent friction, 0.01 to 0.02). At m_nominal the law differs from
+#: k m|m|/rho by (m_reg/m)^2/2 = 5e-5.
+M_REG_REL = 1e-2
+
+
 def friction_dp(k, m, rho, m_reg):
     """Friction pressure drop k m sqrt(m^2 + m_reg^2) / rho [Pa].
 
@@ -137,3 +149,112 @@ def valve_flow(C, z, dp, dp_reg):
     C z / sqrt(dp_reg), so the Jacobian stays finite. Reverse flow for dp < 0.
     """
     return C * z * dp / (dp * dp + dp_reg * dp_reg) ** 0.25
+
+
+#: m_eps = M_EPS_REL * m_nominal: the half-width of the flow band in which the
+#: upwind weight is regularised (``upwind_weight``). Outside the band, |m| >= m_eps,
+#: upwinding is exact: a forward flow of 1e-3 m_nominal or more carries exactly the
+#: upstream enthalpy, so steady closed forms hold to round-off. Inside it, both
+#: sides weigh in, and at zero flow states stay defined and the Jacobian regular.
+#: Why not smaller: a node's mixed enthalpy switches from one side's value to the
+#: other's across the band; when the band is much narrower than the flow changes a
+#: Newton iteration makes (1e-6 m_nominal was tried), the node enthalpy cannot
+#: converge there and flow reversals stop the run (measured on an air pipe whose
+#: back pressure is ramped above the inlet pressure).
+M_EPS_REL = 1e-3
+
+
+#: flow scale of the positive tail of the upwind weight, relative to its band eps
+TAIL_REL = 1e-3
+
+
+def upwind_weight(m, eps):
+    """A C2 smooth max(m, 0) [kg/s], regularised in the band |m| < eps, with a
+    tiny positive tail:
+
+        w(m) = (m + q(m)) / 2 + d^2 / (4 sqrt(m^2 + d^2)),       d = 1e-3 eps
+        q(m) = |m|                                 for |m| >= eps
+        q(m) = eps (3/8 + 3/4 x^2 - 1/8 x^4)       for |m| < eps, x = m/eps
+
+    q and the tail are even, so w(m) - w(-m) = m exactly (the identity behind the
+    exact energy conservation at nodes). q joins |m| with its first and second
+    derivatives at |m| = eps. Outside the band w is m (or 0) to within
+    d^2/(4|m|) = 2.5e-7 eps^2/|m|: upwinding is exact to 2.5e-13 at m_nominal.
+    The tail keeps w > 0 everywhere, so a node's mixing equation keeps a non-zero
+    derivative with respect to its enthalpy even at a Newton iterate whose flows
+    do not balance (without it, all ports of a node can have w = 0 there and the
+    iteration matrix is exactly singular, as measured on a draining pipe behind a
+    closed valve). A C1 band was tried first: the integrator's error test failed
+    repeatedly where a valve closing in 0.1 s drove flows through the band."""
+    m = np.asarray(m, dtype=float)
+    x = m / eps
+    x2 = x * x
+    q = np.where(np.abs(x) >= 1.0, np.abs(m), eps * (0.375 + 0.75 * x2 - 0.125 * x2 * x2))
+    d = TAIL_REL * eps
+    return 0.5 * (m + q) + d * d / (4.0 * np.sqrt(m * m + d * d))
+
+
+def blend_to_own(a, b, eps):
+    """Weight c >= 0 of a volume's own state in its inflow state [kg/s]: with
+    s = a + b the sum of the inflow weights, c = (eps - s)^3/eps^2 for s < eps, else 0
+    (C2 at s = eps). The inflow state (a x_left + b x_right + c x_own)/(s + c) is the
+    exact upwind value when the inflow s >= eps, turns smoothly into the volume's
+    own state as the inflow vanishes, and s + c >= 0.6 eps > 0."""
+    s = np.asarray(a, dtype=float) + np.asarray(b, dtype=float)
+    return np.where(s < eps, (eps - s) ** 3 / eps**2, 0.0)
+
+
+def energy_in(m, h_node, h_own, eps):
+    """Energy flow INTO a component through a port [W], upwind by the actual flow.
+
+        E_in = w(m) h_node - w(-m) h_own
+
+    m [kg/s]: flow into the component at the port; h_node [J/kg]: the node's mixed
+    inflow enthalpy; h_own [J/kg]: the enthalpy the component delivers on outflow
+    (its ``h_out``). For m >> eps this is m h_node, for m << -eps it is m h_own.
+    Every component computes its port energy flows with this one function; with
+    the node's mixing equation this makes energy conservation across a node exact
+    (proof in ``dnasim.assembly``). Exactly m h_node for m >= eps, m h_own for
+    m <= -eps."""
+    return upwind_weight(m, eps) * h_node - upwind_weight(-np.asarray(m, dtype=float), eps) * h_own
+
+
+def upwind_mean(m, a, b, eps):
+    """Smooth upwind value of a quantity across a face [unit of a]:
+    (w(m) a + w(-m) b) / (w(m) + w(-m)); a is the value on the side m > 0 comes
+    from (e.g. a density). Equals a for m >= eps, b for m <= -eps, (a + b)/2 at 0."""
+    wp = upwind_weight(m, eps)
+    wm = upwind_weight(-np.asarray(m, dtype=float), eps)
+    return (wp * a + wm * b) / (wp + wm)
+
+
+def saturation_enthalpies(medium, p):
+    """(h_liq, h_vap) [J/kg] on the saturation lines at pressures p [Pa] (arrays);
+    nan above the critical pressure. Uses ``medium.saturation_enthalpies`` when the
+    medium has it, else the medium's h_pQ at qualities 0 and 1."""
+    p = np.atleast_1d(np.asarray(p, dtype=float))
+    f = getattr(medium, "saturation_enthalpies", None)
+    if f is not None:
+        hl, hv = f(p)
+        return np.asarray(hl, dtype=float), np.asarray(hv, dtype=float)
+    hl = np.full(p.size, np.nan)
+    hv = np.full(p.size, np.nan)
+    for i, pi in enumerate(p):
+        try:
+            hl[i] = medium.h_pQ(float(pi), 0.0)
+            hv[i] = medium.h_pQ(float(pi), 1.0)
+        except Exception:  # above the critical pressure or not condensable
+            pass
+    return hl, hv
+
+
+def is_condensable(medium) -> bool:
+    """True when the medium has a liquid-vapour dome (``medium.condensable`` when the
+    medium declares it; else whether h_pQ(1 bar, 0) exists)."""
+    flag = getattr(medium, "condensable", None)
+    if flag is not None:
+        return bool(flag)
+    try:
+        return bool(np.isfinite(medium.h_pQ(1e5, 0.0)))
+    except Exception:
+        return False
