@@ -241,28 +241,40 @@ class StreamingCSV:
         )
 
     def _write_all(self, text: str) -> None:
-        """Write whole lines; on failure cut the file back to the last whole line."""
+        """Write whole lines; on failure cut the file back to the last whole line,
+        close it and raise ``OutputError``."""
+        try:
+            self._write_or_cut(text)
+        except OSError as exc:
+            reached = self._pending[-1][0] if self._pending else None
+            self._give_up(exc, reached)
+
+    def _write_or_cut(self, text: str) -> None:
+        """Write ``text`` (whole lines); on an OSError cut the file back to the last
+        whole line on disk and re-raise, the file left open."""
         data = text.encode("utf-8")
         view = memoryview(data)
         try:
             while view:
                 n = os.write(self._fd, view)
                 view = view[n:]
-        except OSError as exc:
-            reached = self._pending[-1][0] if self._pending else None
+        except OSError:
             try:
                 os.ftruncate(self._fd, self._size)
                 os.lseek(self._fd, self._size, os.SEEK_SET)
             except OSError:
                 pass
-            self._pending = []
-            fd, self._fd = self._fd, None
-            try:
-                os.close(fd)
-            except OSError:
-                pass
-            raise self._error(_oserror_text(exc), reached) from None
+            raise
         self._size += len(data)
+
+    def _give_up(self, exc: OSError, reached: float | None):
+        self._pending = []
+        fd, self._fd = self._fd, None
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+        raise self._error(_oserror_text(exc), reached) from None
 
     @property
     def closed(self) -> bool:
@@ -288,9 +300,22 @@ class StreamingCSV:
         with _SignalsBlocked():
             if self._pending:
                 rows = self._pending
-                self._write_all("".join(line for _, line in rows))
-                self.rows_written += len(rows)
-                self.last_time = rows[-1][0]
+                try:
+                    self._write_or_cut("".join(line for _, line in rows))
+                    self.rows_written += len(rows)
+                    self.last_time = rows[-1][0]
+                except OSError:
+                    # The block did not fit (disk full, file size limit): keep as many
+                    # whole rows of it as still fit, one at a time, then report.
+                    reached = rows[-1][0]
+                    for k, (t_row, line) in enumerate(rows):
+                        try:
+                            self._write_or_cut(line)
+                        except OSError as exc:
+                            self._pending = rows[k:]
+                            self._give_up(exc, reached)
+                        self.rows_written += 1
+                        self.last_time = t_row
                 self._pending = []
             self._last_flush = time.monotonic()
 
