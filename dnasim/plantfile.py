@@ -90,7 +90,7 @@ SIMULATION_KEYS = {
 #: before anything is allocated, with the value and the limit in the message.
 #: ``count`` applies to every integer parameter not listed by name.
 LIMITS: dict[str, int] = {
-    "n_volumes": 1000,  # control volumes of one pipe
+    "n_volumes": 5000,  # control volumes of one pipe
     "n_sections": 1000,  # sections of one heat exchanger
     "n_inlets": 64,  # inlets of one mixer
     "n_outlets": 64,  # outlets of one splitter
@@ -561,43 +561,19 @@ def _convert_value(v, unit: str, difference: bool, lenient_difference: bool = Fa
     return to_si(v, unit)
 
 
-#: Temporary, until the component files carry the markers themselves (Param unit
-#: "delta_K" for a temperature difference; Param.per_signal for a parameter in the
-#: unit of the measured signal (1) or its inverse (-1)); read only when a Param has
-#: no marker of its own.
-_DIFFERENCE_FALLBACK = {("Pipe", "dT_reg"), ("HeatExchanger", "dT_reg")}
-_PER_SIGNAL_FALLBACK = {
-    ("PIController", "Kp"): -1,
-    ("PIController", "KI"): -1,
-    ("PIController", "setpoint"): 1,
-    ("PIController", "measured_nominal"): 1,
-}
-#: signal inputs that accept a signal of any unit (SignalPort unit "*")
-_ANY_UNIT_INPUT_FALLBACK = {("PIController", "measured")}
-
-
 def is_difference(cls, p) -> bool:
     """Whether parameter ``p`` of ``cls`` is a temperature difference (unit "delta_K")."""
-    unit = _param_unit(p)
-    if unit.startswith("delta_"):
-        return True
-    return unit == "K" and (getattr(cls, "__name__", ""), p.name) in _DIFFERENCE_FALLBACK
+    return _param_unit(p).startswith("delta_")
 
 
 def per_signal(cls, p) -> int:
     """The power of the measured signal's unit in ``p``'s unit (Kp: -1, setpoint: 1)."""
-    k = getattr(p, "per_signal", None)
-    if k is None:
-        k = _PER_SIGNAL_FALLBACK.get((getattr(cls, "__name__", ""), p.name), 0)
-    return int(k)
+    return int(getattr(p, "per_signal", 0) or 0)
 
 
 def input_unit(cls, port) -> str:
     """The unit a signal input expects; "*" for any unit."""
-    unit = str(getattr(port, "unit", "1") or "1")
-    if (getattr(cls, "__name__", ""), getattr(port, "name", port)) in _ANY_UNIT_INPUT_FALLBACK:
-        return "*"
-    return unit
+    return str(getattr(port, "unit", "1") or "1")
 
 
 def param_unit_for(cls, p, signal_units=()) -> str:

@@ -213,8 +213,8 @@ def test_temperature_difference_refuses_degC(tmp_path):
 @pytest.mark.parametrize(
     "old, new, words",
     [
-        ("n_volumes = 1", "n_volumes = 1000000000", ["n_volumes = 1e+09", "limit of 1000"]),
-        ("n_volumes = 1", "n_volumes = 1e5", ["n_volumes = 100000", "limit of 1000"]),
+        ("n_volumes = 1", "n_volumes = 1000000000", ["n_volumes = 1e+09", "limit of 5000"]),
+        ("n_volumes = 1", "n_volumes = 1e5", ["n_volumes = 100000", "limit of 5000"]),
     ],
 )
 def test_counts_have_an_upper_limit(tmp_path, old, new, words):

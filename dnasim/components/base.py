@@ -103,6 +103,9 @@ class Param:
     time_function: bool = False
     kind: str = "number"
     choices: tuple | None = None
+    #: the power of the measured signal's unit in this parameter's unit: a
+    #: controller gain [output unit per measured unit] is -1, a set point 1
+    per_signal: int = 0
 
 
 @dataclass(frozen=True)

@@ -33,10 +33,20 @@ class PIController(Component):
     """
 
     PARAMS = (
-        Param("Kp", "1", doc="proportional gain [output unit per measured unit]"),
-        Param("KI", "1/s", 0.0, "integral gain [output unit per measured unit and second]"),
+        Param("Kp", "1", doc="proportional gain [output unit per measured unit]", per_signal=-1),
         Param(
-            "setpoint", "1", doc="set point, in the unit of the measured signal", time_function=True
+            "KI",
+            "1/s",
+            0.0,
+            "integral gain [output unit per measured unit and second]",
+            per_signal=-1,
+        ),
+        Param(
+            "setpoint",
+            "1",
+            doc="set point, in the unit of the measured signal",
+            time_function=True,
+            per_signal=1,
         ),
         Param("z_min", "1", 0.0, "lower output limit"),
         Param("z_max", "1", 1.0, "upper output limit"),
@@ -56,9 +66,10 @@ class PIController(Component):
             100.0,
             "typical magnitude of the measured signal (scales)",
             min=0.0,
+            per_signal=1,
         ),
     )
-    SIGNAL_INPUTS = (SignalPort("measured", "1", "measured value"),)
+    SIGNAL_INPUTS = (SignalPort("measured", "*", "measured value (any unit)"),)
     SIGNAL_OUTPUTS = (SignalPort("z", "1", "limited output", variable="z"),)
     USES_MEDIUM = False
 

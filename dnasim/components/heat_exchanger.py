@@ -64,11 +64,11 @@ class HeatExchanger(Component):
             kind="bool",
         ),
         Param("C_wall", "J/K", doc="wall heat capacity", min=0.0),
-        Param("n_sections", "1", 1, "number of sections", min=1, kind="int"),
+        Param("n_sections", "1", 1, "number of sections", min=1, max=1000, kind="int"),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow", min=0.0),
         Param(
             "dT_reg",
-            "K",
+            "delta_K",
             1.0,
             "LMTD regularisation width (exact LMTD for differences >~ 10 dT_reg)",
             min=0.0,

@@ -74,7 +74,7 @@ class Mixer(_Junction):
     """
 
     PARAMS = (
-        Param("n_inlets", "1", 2, "number of inlets", min=2, kind="int"),
+        Param("n_inlets", "1", 2, "number of inlets", min=2, max=64, kind="int"),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
     )
@@ -139,7 +139,7 @@ class Splitter(_Junction):
     """
 
     PARAMS = (
-        Param("n_outlets", "1", 2, "number of outlets", min=2, kind="int"),
+        Param("n_outlets", "1", 2, "number of outlets", min=2, max=64, kind="int"),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
     )

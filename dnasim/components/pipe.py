@@ -64,7 +64,9 @@ class Pipe(Component):
             min=0.0,
             time_function=True,
         ),
-        Param("n_volumes", "1", 1, "number of control volumes in series", min=1, kind="int"),
+        Param(
+            "n_volumes", "1", 1, "number of control volumes in series", min=1, max=5000, kind="int"
+        ),
         Param(
             "internal_energy",
             "1",
@@ -88,7 +90,7 @@ class Pipe(Component):
         ),
         Param(
             "dT_reg",
-            "K",
+            "delta_K",
             1.0,
             "LMTD regularisation width (exact LMTD for differences >~ 10 dT_reg)",
             min=0.0,
