@@ -26,7 +26,8 @@ import numpy as np
 
 from dnasim.components import Pipe, PressureBoundary, Valve
 from dnasim.media import get_medium
-from dnasim.network import Plant
+from dnasim.plant import Plant
+from dnasim.start import initial_values
 from dnasim.timefunctions import Step
 
 T_END = 60.0
@@ -88,8 +89,8 @@ class PropertyTimer:
 
 def run(n, solver, rtol=1e-6, linsolver=None):
     plant = steam_pipe(n)
-    dae = plant.assemble()
-    y0, yp0 = plant.initial_values(0.0, "steady")
+    dae = plant.compile()
+    y0, yp0 = initial_values(dae, 0.0, "steady")
     water = get_medium("Water")
     with PropertyTimer(water) as timer:
         t0 = time.perf_counter()

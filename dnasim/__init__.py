@@ -1,29 +1,63 @@
-"""dnasim: dynamic simulation of energy systems as index-1 DAEs (in the tradition of DTU's DNA)."""
+"""dnasim: dynamic simulation of energy systems as index-1 DAEs (in the tradition of DTU's DNA).
+
+The stages, each one object with one job (docs/architecture.md)::
+
+    spec = PlantSpec(...)  or  load_plant("plant.toml")   # data / the Plant graph
+    system = compile(plant)                                # the DAE over plant-wide arrays
+    res = simulate(system, t_end=100.0, solver=NordsieckBDF(), sinks=[CSVSink("r.csv")])
+    res["pipe.T_out"], res.to_dataframe(), res.to_xarray()
+"""
 
 from dnasim.errors import DAEError, DnasimError, PlantError, ResidualDomainError
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "solve_dae",
-    "DAEResult",
+    "CSVSink",
+    "ComponentSpec",
     "DAEError",
+    "DAEResult",
     "DnasimError",
+    "IDA",
+    "NordsieckBDF",
+    "Plant",
     "PlantError",
+    "PlantSpec",
     "ResidualDomainError",
+    "Results",
+    "SimulationSettings",
+    "System",
+    "compile",
     "load_plant",
+    "simulate",
+    "solve_dae",
 ]
+
+# Imported lazily, so `dnasim --help` starts fast: the solver pulls in scipy, the
+# plant layer the component library, and nothing imports CoolProp before a medium
+# needs it.
+_LAZY = {
+    "solve_dae": "dnasim.solver",
+    "DAEResult": "dnasim.solver",
+    "load_plant": "dnasim.plantfile",
+    "Plant": "dnasim.plant",
+    "PlantSpec": "dnasim.spec",
+    "ComponentSpec": "dnasim.spec",
+    "SimulationSettings": "dnasim.spec",
+    "compile": "dnasim.compiler",
+    "System": "dnasim.system",
+    "simulate": "dnasim.simulation",
+    "NordsieckBDF": "dnasim.simulation",
+    "IDA": "dnasim.simulation",
+    "CSVSink": "dnasim.simulation",
+    "Results": "dnasim.results",
+}
 
 
 def __getattr__(name):
-    # Imported lazily, so `dnasim --help` starts fast: the solver pulls in scipy, the
-    # plant-file layer the component library and CoolProp.
-    if name in ("solve_dae", "DAEResult"):
-        import dnasim.solver
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'dnasim' has no attribute {name!r}")
+    import importlib
 
-        return getattr(dnasim.solver, name)
-    if name == "load_plant":
-        from dnasim.plantfile import load_plant
-
-        return load_plant
-    raise AttributeError(f"module 'dnasim' has no attribute {name!r}")
+    return getattr(importlib.import_module(module), name)

@@ -217,7 +217,14 @@ _COOLPROP_CACHE_OPTION = click.option(
 )
 @click.option("--t-end", default=None, metavar="T", help='End time, e.g. 900 or "15 min".')
 @click.option("--rtol", type=float, default=None, metavar="R", help="Relative tolerance.")
-@click.option("--atol", type=float, default=None, metavar="A", help="Absolute tolerance.")
+@click.option(
+    "--atol-scaled",
+    "atol",
+    type=float,
+    default=None,
+    metavar="A",
+    help="Absolute tolerance per unit of each variable's scale.",
+)
 @click.option("--max-order", type=click.IntRange(1, 5), default=None, help="Maximum BDF order.")
 @click.option(
     "--max-steps",
@@ -318,8 +325,8 @@ def _run(
         sim.rtol = rtol
     if atol is not None:
         if not (atol > 0 and math.isfinite(atol)):
-            raise InputError(f"option --atol: must be a finite number > 0 (got {atol})")
-        sim.atol = atol
+            raise InputError(f"option --atol-scaled: must be a finite number > 0 (got {atol})")
+        sim.atol_scaled = atol
     if max_order is not None:
         sim.max_order = max_order
     if max_steps is not None:
@@ -429,7 +436,10 @@ def _check(plant_file, coolprop_cache):
     _coolprop_cache(coolprop_cache)
     loaded = _load(plant_file)
     try:
-        report = loaded.plant.check()
+        from dnasim.compiler import check
+
+        # structure analysis on the System, built once (media, sparsity, events)
+        report, _system = check(loaded.plant)
     except PlantError as exc:
         raise InputError(f"{plant_file}: {exc}") from None
     except DnasimError as exc:
@@ -442,23 +452,6 @@ def _check(plant_file, coolprop_cache):
     from dnasim.runner import describe_report
 
     text, ok = describe_report(report)
-    if ok:
-        # build the DAE too (media, sparsity, events): still no numerics
-        assemble = getattr(loaded.plant, "assemble", None)
-        try:
-            if assemble is not None:
-                assemble()
-        except PlantError as exc:
-            text += f"\nerror: {exc}"
-            ok = False
-        except DnasimError as exc:
-            text += f"\nerror: the plant cannot be assembled: {exc}"
-            ok = False
-        except Exception as exc:
-            located = _located(exc, plant_file)
-            if located is not None:
-                raise InputError(located) from None
-            raise _internal(exc, EXIT_INPUT) from None
     click.echo(
         f"{plant_file}: plant '{loaded.spec.name}', {len(loaded.spec.components)} components"
     )

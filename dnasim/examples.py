@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 from dnasim.components import Attemperator, PIController, Pipe, PressureBoundary, Valve
-from dnasim.network import Plant
+from dnasim.plant import Plant
 from dnasim.timefunctions import Ramp
 
 

@@ -21,7 +21,8 @@ T_DEFAULT = 293.15  # K
 
 
 def flow_order(plant) -> list[str]:
-    """Component names in breadth-first order from the sources along the design flow."""
+    """``plant``: anything with ``components`` and ``connections`` (a Plant or a
+    System). Component names in breadth-first order from the sources along the design flow."""
     downstream = {}  # node -> components with an inlet/probe there
     for (cname, pname), node in plant.connections.items():
         port = plant.components[cname].port(pname)
@@ -51,14 +52,14 @@ def flow_order(plant) -> list[str]:
     return fluid + signal
 
 
-def initial_guess(plant, dae, t0: float) -> np.ndarray:
-    y = np.zeros(dae.n)
+def initial_guess(system, t0: float) -> np.ndarray:
+    y = np.zeros(system.n)
     p_guess, h_guess = {}, {}
     p_rank, h_rank = {}, {}
-    for name, comp in plant.components.items():
+    for name, comp in system.components.items():
         guesses = comp.guess_nodes(t0) if comp.fluid_ports() else {}
         for pname, (p, h) in guesses.items():
-            node = plant.connections[(name, pname)]
+            node = system.connections[(name, pname)]
             port = comp.port(pname)
             rp = 2 if port.pressure == "fixed" else 1
             rh = 2 if port.h_source and port.role != "probe" else 1
@@ -67,15 +68,15 @@ def initial_guess(plant, dae, t0: float) -> np.ndarray:
             if h is not None and rh > h_rank.get(node, 0):
                 h_guess[node], h_rank[node] = h, rh
     # propagate along components
-    for _ in range(len(plant.components) + 1):
+    for _ in range(len(system.components) + 1):
         changed = False
-        for name, comp in plant.components.items():
-            nodes = [plant.connections[(name, p.name)] for p in comp.fluid_ports()]
+        for name, comp in system.components.items():
+            nodes = [system.connections[(name, p.name)] for p in comp.fluid_ports()]
             inlets = [
-                plant.connections[(name, p.name)] for p in comp.fluid_ports() if p.role == "inlet"
+                system.connections[(name, p.name)] for p in comp.fluid_ports() if p.role == "inlet"
             ]
             outlets = [
-                plant.connections[(name, p.name)] for p in comp.fluid_ports() if p.role == "outlet"
+                system.connections[(name, p.name)] for p in comp.fluid_ports() if p.role == "outlet"
             ]
             known_p = [p_guess[n] for n in nodes if n in p_guess]
             for n in nodes:
@@ -89,16 +90,16 @@ def initial_guess(plant, dae, t0: float) -> np.ndarray:
                     changed = True
         if not changed:
             break
-    for node in plant.node_names():
-        k = dae.node_index[node]
+    for node in system.node_names:
+        k = system.node_index[node]
         p = p_guess.get(node, P_DEFAULT)
         h = h_guess.get(node)
         if h is None:
-            medium = plant.node_medium(node)
+            medium = system.node_media.get(node)
             h = medium.h_pT(p, T_DEFAULT) if medium is not None else 1e5
         y[k], y[k + 1] = p, h
-    by_name = {b.comp.name: b for b in dae.blocks}
-    for name in flow_order(plant):
+    by_name = {b.comp.name: b for b in system.blocks}
+    for name in flow_order(system):
         b = by_name[name]
         x = b.local(y)
         b.comp.initial_guess(t0, x)

@@ -9,7 +9,7 @@ The schema is documented in ``docs/plant_files.md``. In short::
     t_end = "20 min"
     output_interval = "1 s"      # optional; default: every accepted step
     rtol = 1e-6
-    atol = 1e-8
+    atol_scaled = 1e-8
     max_order = 4
     start = "steady"             # or "given"
 
@@ -36,12 +36,21 @@ import math
 import re
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from dnasim.errors import PlantError
-from dnasim.units import UnitError, parse_unit, to_si
+from dnasim.spec import (
+    LIMITS,
+    ComponentSpec,
+    PlantSpec,
+    SimulationSettings,
+    build_plant,
+    limit_message,
+)
+from dnasim.spec import Problems as _Errors
+from dnasim.units import UnitError, parse_unit
 
 __all__ = [
     "load_plant",
@@ -79,121 +88,18 @@ SIMULATION_KEYS = {
     "t_start": "start time [s] (default 0)",
     "output_interval": "time between rows of results.csv [s] (default: every accepted step)",
     "rtol": "relative error tolerance (default 1e-6)",
-    "atol": "absolute error tolerance (default 1e-8)",
+    "atol_scaled": "absolute error tolerance per unit of each variable's scale: "
+    "atol_i = atol_scaled * max(nominal_i, |y0_i|) (default 1e-8)",
     "max_order": "maximum BDF order, 1..5 (default 4)",
     "start": '"steady" (steady state at t_start) or "given" (initial states from parameters)',
     "max_step": "largest step size [s] (default: unlimited)",
     "max_steps": "most accepted steps before the run stops (default 500000)",
 }
 
-#: Upper limits of counts, in one place: a plant file asking for more is refused
-#: before anything is allocated, with the value and the limit in the message.
-#: ``count`` applies to every integer parameter not listed by name.
-LIMITS: dict[str, int] = {
-    "n_volumes": 5000,  # control volumes of one pipe
-    "n_sections": 1000,  # sections of one heat exchanger
-    "n_inlets": 64,  # inlets of one mixer
-    "n_outlets": 64,  # outlets of one splitter
-    "count": 10_000,  # any other integer parameter
-    "cells": 20_000,  # volumes and sections of the whole plant together
-    "components": 2_000,  # components of one plant
-    "output_points": 10_000_000,  # rows of results.csv from output_interval
-    "max_steps": 100_000_000,  # [simulation] max_steps / --max-steps
-}
-
-
-def limit_message(what: str, value, limit) -> str:
-    """``n_volumes = 100000 is above the limit of 1000``."""
-    return f"{what} = {value:g} is above the limit of {limit:g}"
-
-
-def output_point_count(t_start: float, t_end: float, interval: float) -> float:
-    """Number of rows an output interval asks for (a float: it may be huge or inf)."""
-    ratio = (t_end - t_start) / interval
-    if not math.isfinite(ratio):
-        return math.inf
-    return math.floor(ratio + 1e-9) + 1.0
-
-
 _TOP_LEVEL = ("plant", "simulation", "components")
 
 
 # --------------------------------------------------------------------------- data
-
-
-@dataclass
-class SimulationSettings:
-    """The ``[simulation]`` table, in SI."""
-
-    t_end: float = 100.0
-    t_start: float = 0.0
-    output_interval: float | None = None
-    rtol: float = 1e-6
-    atol: float = 1e-8
-    max_order: int = 4
-    start: str = "steady"
-    max_step: float | None = None
-    max_steps: int | None = None
-
-    def output_points(self) -> float | None:
-        """How many rows ``output_interval`` asks for (None: every accepted step)."""
-        if self.output_interval is None:
-            return None
-        return output_point_count(self.t_start, self.t_end, self.output_interval)
-
-    def check_output_points(self) -> None:
-        """Raise ``PlantError`` when ``output_interval`` asks for more rows than
-        ``LIMITS["output_points"]`` (checked before any grid is built)."""
-        n = self.output_points()
-        limit = LIMITS["output_points"]
-        if n is not None and not n <= limit:
-            raise PlantError(
-                f"[simulation] output_interval = {self.output_interval:g} s from "
-                f"{self.t_start:g} s to t_end = {self.t_end:g} s asks for {n:g} output "
-                f"points, above the limit of {limit:g}; choose a longer output_interval or "
-                "a shorter t_end"
-            )
-
-    def t_eval(self):
-        """Output times for ``output_interval`` (None: every accepted step); raises
-        ``PlantError`` above ``LIMITS["output_points"]`` rows."""
-        if self.output_interval is None:
-            return None
-        import numpy as np
-
-        self.check_output_points()
-        n = int(self.output_points()) - 1
-        t = self.t_start + self.output_interval * np.arange(n + 1)
-        if t[-1] < self.t_end - 1e-9 * max(1.0, abs(self.t_end)):
-            t = np.append(t, self.t_end)
-        return t
-
-
-@dataclass
-class ComponentSpec:
-    name: str
-    type: str
-    cls: type
-    params: dict[str, Any] = field(default_factory=dict)
-    ports: dict[str, str] = field(default_factory=dict)
-    inputs: dict[str, str] = field(default_factory=dict)
-    description: str = ""
-    instance: Any = None
-    fluid_ports: list[str] = field(default_factory=list)
-    signal_inputs: list[str] = field(default_factory=list)
-    signal_outputs: list[str] = field(default_factory=list)
-
-
-@dataclass
-class PlantSpec:
-    """A validated plant file, before any ``Plant`` is built."""
-
-    path: str
-    name: str
-    description: str
-    simulation: SimulationSettings
-    components: list[ComponentSpec]
-    medium: str | None = None
 
 
 @dataclass
@@ -211,37 +117,6 @@ class LoadedPlant:
 
 
 # --------------------------------------------------------------------------- errors
-
-
-class _Errors:
-    """Collects problems; each is one paragraph naming file, table, key and line."""
-
-    def __init__(self, path: str, lines: _LineIndex | None):
-        self.path = path
-        self.lines = lines
-        self.items: list[str] = []
-
-    def add(self, table: Sequence[str], key: str | None, message: str) -> None:
-        where = [self.path]
-        table = tuple(table)
-        if table:
-            where.append("[" + ".".join(_quote_key(k) for k in table) + "]")
-        if key is not None:
-            where.append(f"key '{key}'")
-        line = self.lines.find(table, key) if self.lines else None
-        if line:
-            where.append(f"line {line}")
-        self.items.append(", ".join(where) + ": " + message)
-
-    def raise_if_any(self) -> None:
-        if self.items:
-            err = PlantError("\n\n".join(self.items))
-            err.errors = list(self.items)
-            raise err
-
-
-def _quote_key(k: str) -> str:
-    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else '"' + k + '"'
 
 
 def _suggest(word: str, choices) -> str:
@@ -535,30 +410,9 @@ def _quantity(
 
 
 def _convert_value(v, unit: str, difference: bool, lenient_difference: bool = False) -> float:
-    from dnasim.units import Unit, convert, has_unit, parse_quantity
+    from dnasim.units import convert_quantity
 
-    if not isinstance(v, str) or not has_unit(v):
-        return to_si(v, unit)
-    number, u = parse_quantity(v)
-    target = parse_unit(unit)
-    if u.offset:
-        absolute = number * u.scale + u.offset
-        if lenient_difference:  # "10 degC" as a difference is 10 K
-            return float(convert(number, Unit(u.dims, u.scale), unit))
-        if target.dims != u.dims:
-            hint = ""
-            if target.dims == parse_unit("1/K").dims:
-                hint = f"; a gain per kelvin is written '{number:g} 1/K'"
-            raise UnitError(
-                f"{v!r} is an absolute temperature ({absolute:g} K: degC and degF have an "
-                f"offset), but {target.dimension} is expected (unit {unit!r}){hint}"
-            )
-        if difference:
-            raise UnitError(
-                f"{v!r} is an absolute temperature ({absolute:g} K), but this parameter is a "
-                f"temperature difference: write '{number:g} K' or '{number:g} delta_degC'"
-            )
-    return to_si(v, unit)
+    return convert_quantity(v, unit, difference, lenient_difference)
 
 
 def is_difference(cls, p) -> bool:
@@ -609,37 +463,13 @@ def _example(unit: str) -> str:
     }.get(unit, f"1 {unit}")
 
 
-_POSITIVE = {"Pa": "pressure", "m3": "volume", "m2": "area", "kg": "mass", "K": "temperature"}
-
-
 def _check_range(x: float, p, errors, table, key, shown) -> None:
-    """Bounds of the parameter; pressures, volumes, areas, masses and absolute
-    temperatures must also be > 0 when the component gives no lower bound or 0."""
-    unit = _param_unit(p)
-    lo = getattr(p, "min", None)
-    hi = getattr(p, "max", None)
-    name = p.name
-    what = _POSITIVE.get(unit)
-    if what is not None and (lo is None or lo <= 0) and x <= 0:
-        errors.add(
-            table,
-            key,
-            f"{shown} is out of the physical range: {name} is a {what} and must be "
-            f"greater than 0 {unit} (got {x:g} {unit})",
-        )
-        return
-    if lo is not None and x < lo:
-        errors.add(
-            table,
-            key,
-            f"{shown} is out of range: {name} must be at least {lo:g} {unit} (got {x:g} {unit})",
-        )
-    if hi is not None and x > hi:
-        errors.add(
-            table,
-            key,
-            f"{shown} is out of range: {name} must be at most {hi:g} {unit} (got {x:g} {unit})",
-        )
+    """``Param.range_problem``: the same check as the Python API's."""
+    problem = p.range_problem(x)
+    if problem is not None:
+        kind, text = problem
+        what = "out of the physical range" if kind == "physical" else "out of range"
+        errors.add(table, key, f"{shown} is {what}: {text}")
 
 
 def _time_function(v: dict, p, errors: _Errors, table, key, unit: str, difference=False):
@@ -812,7 +642,7 @@ def _simulation(data, errors: _Errors) -> SimulationSettings:
             errors.add(table, "max_steps", limit_message("max_steps", x, limit))
         else:
             s.max_steps = x
-    for k, lo, hi in (("rtol", 0.0, 1.0), ("atol", 0.0, math.inf)):
+    for k, lo, hi in (("rtol", 0.0, 1.0), ("atol_scaled", 0.0, math.inf)):
         if k in sim:
             x = _quantity(sim[k], "1", errors, table, k)
             if x is not None:
@@ -1351,43 +1181,6 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
 # --------------------------------------------------------------------------- building
 
 
-def build_plant(spec: PlantSpec):
-    """Turn a validated spec into a ``Plant`` through the plant model's Python API."""
-    from dnasim.network import Plant
-
-    errors = _Errors(spec.path, None)
-    plant = Plant(spec.name, medium=spec.medium) if spec.medium else Plant(spec.name)
-    for c in spec.components:
-        try:
-            comp = c.instance if c.instance is not None else c.cls(c.name, **c.params)
-        except PlantError as exc:
-            errors.add(("components", c.name), None, str(exc))
-            continue
-        except (TypeError, ValueError) as exc:
-            errors.add(("components", c.name), None, f"{c.type} refused its parameters: {exc}")
-            continue
-        plant.add(comp)
-    errors.raise_if_any()
-    for c in spec.components:
-        for port, node in c.ports.items():
-            try:
-                plant.connect(f"{c.name}.{port}", node)
-            except PlantError as exc:
-                errors.add(("components", c.name, "ports"), port, str(exc))
-    for c in spec.components:
-        for inp, src in c.inputs.items():
-            try:
-                plant.link(src, f"{c.name}.{inp}")
-            except PlantError as exc:
-                errors.add(("components", c.name, "inputs"), inp, str(exc))
-    errors.raise_if_any()
-    try:
-        plant.simulation = spec.simulation
-    except AttributeError:  # a Plant with __slots__: settings stay in LoadedPlant
-        pass
-    return plant
-
-
 def _port_example(ports) -> str:
     return ", ".join(f'{q} = "n{i}"' for i, q in enumerate(ports, 1)) or 'inlet = "n1"'
 
@@ -1419,36 +1212,22 @@ def load_plant(path: str | Path):
     (a :class:`SimulationSettings`); ``simulate_plant(plant)`` runs with them::
 
         plant = dnasim.load_plant("plants/attemperator.toml")
-        res = plant.simulate(plant.simulation.t_end, rtol=1e-6, atol=1e-8)
+        res = plant.simulate(plant.simulation.t_end, rtol=1e-6, atol_scaled=1e-8)
         df = res.to_dataframe()
     """
     return load(path).plant
 
 
 def simulate_plant(plant, settings: SimulationSettings | None = None, **overrides):
-    """``plant.simulate`` with a file's settings; keyword arguments override them.
+    """``plant.simulate`` with a file's settings; keyword arguments override them."""
+    from dnasim.simulation import simulation_keywords
 
-    Only keywords ``plant.simulate`` accepts are passed.
-    """
     s = settings or getattr(plant, "simulation", None) or SimulationSettings()
-    kwargs = {
-        "rtol": s.rtol,
-        "atol": s.atol,
-        "max_order": s.max_order,
-        "start": s.start,
-        "t_eval": s.t_eval(),
-    }
-    if s.max_step is not None:
-        kwargs["max_step"] = s.max_step
-    if s.t_start:
-        kwargs["t0"] = s.t_start
+    kwargs = simulation_keywords(s)
     t_end = overrides.pop("t_end", s.t_end)
+    if overrides.get("solver") is not None:
+        from dnasim.backends import SOLVER_OPTIONS
+
+        kwargs = {k: v for k, v in kwargs.items() if k not in SOLVER_OPTIONS}
     kwargs.update(overrides)
-    try:
-        sig = inspect.signature(plant.simulate)
-        accepts_any = any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values())
-        if not accepts_any:
-            kwargs = {k: v for k, v in kwargs.items() if k in sig.parameters}
-    except (TypeError, ValueError):
-        pass
     return plant.simulate(t_end, **kwargs)

@@ -1,25 +1,55 @@
-"""PlantResults: a simulation's output, every quantity addressed by name."""
+"""Results: one simulation's output, a read-only Mapping of output name -> array.
+
+    res = simulate(system, t_end=100.0)
+    res["pipe1.T_out"]          # ndarray over res.t [K]
+    res.units["pipe1.T_out"]    # "K"
+    list(res)                   # the output names, in System.output_names() order
+    df = res.to_dataframe()     # index t [s], units in df.attrs["units"]
+    ds = res.to_xarray()        # dimension "t", units in each variable's attrs
+
+Time is strictly increasing. A solver hands over two rows at the time of a
+restart (a located switch, a time-function breakpoint): the state before and
+the state after the jump. Results keeps the one after and marks it in
+``restart`` (bool over t); the value before is the limit from the left of the
+row before it.
+
+Failures: ``success`` False and ``message`` say why the run ended early; the
+rows up to that point are kept. ``simulate(..., throw=True)`` raises
+``DAEError`` instead, carrying these Results as ``err.result``.
+
+Pickling: derived outputs (temperatures, ...) are computed on first access
+from the System; pickling computes them first, so a pickle holds arrays only
+(and the dense output ``sol`` when the solver kept it).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
+__all__ = ["Results"]
 
-class PlantResults:
-    """Results of ``Plant.simulate``.
+
+class Results(Mapping):
+    """Output name -> ndarray over ``t``.
 
     Attributes
     ----------
-    t : ndarray [s]
+    t : ndarray [s], strictly increasing
+    restart : ndarray of bool over t; True where the row is the state just after
+        a restart at that time
     names : list of output names ("a.p", "pipe1.M[0]", "pipe1.T_out", "a.T", ...)
     units : dict name -> unit string
-    results : dict name -> ndarray over t (also ``res[name]``); derived outputs
-        (temperatures, ...) cost property calls and are computed on first access
-    y, yp : raw solution arrays (n x len(t)) in the order of ``variable_names``
-    stats : solver statistics (steps, residual_evals, ...) plus wall_time [s]
-    step_history : array of (t, h, order) per accepted step
-    event_log : list of dicts {"event", "name", "component", "switch", "iterates", "t"}
+    y, yp : raw solution (n x len(t)) in the order of ``variable_names``
+    events : list of dicts {"event", "name", "component", "switch", "iterates", "t",
+        "terminal"}, one per located switch crossing
+    steps : ndarray (steps x 3): t [s], h [s], order of each accepted step
+    stats : solver counters (steps, residual_evals, jac_evals, lu_decomps, ...),
+        plus wall_time and init_time [s]
     success, message : how the integration ended
+    solver : the name of the backend ("NordsieckBDF", "IDA")
+    sol : dense output y(t) when the solver kept it, else None
     """
 
     def __init__(
@@ -28,116 +58,114 @@ class PlantResults:
         names,
         units,
         values,
-        y,
-        yp,
-        variable_names,
-        stats,
-        step_history,
-        event_log,
-        success,
-        message,
+        *,
+        y=None,
+        yp=None,
+        variable_names=(),
+        restart=None,
+        events=(),
+        steps=None,
+        stats=None,
+        success=True,
+        message="",
+        solver="",
         sol=None,
     ):
-        self.t = t
-        self.names = names
-        self.units = units
+        self.t = np.asarray(t, dtype=float)
+        self.names = list(names)
+        self.units = dict(units)
         self._values = values  # array (names x t), or a callable computing it on first use
-        self._results = None
+        self._table = None
         self.y = y
         self.yp = yp
-        self.variable_names = variable_names
-        self.stats = stats
-        self.step_history = step_history
-        self.event_log = event_log
-        self.success = success
-        self.message = message
+        self.variable_names = list(variable_names)
+        self.restart = (
+            np.zeros(self.t.size, dtype=bool) if restart is None else np.asarray(restart, bool)
+        )
+        self.events = list(events)
+        self.steps = np.zeros((0, 3)) if steps is None else np.asarray(steps, dtype=float)
+        self.stats = dict(stats or {})
+        self.success = bool(success)
+        self.message = str(message)
+        self.solver = solver
         self.sol = sol
 
-    @classmethod
-    def from_dae_result(cls, plant, dae, res, wall_time=None, init_time=None):
-        t = np.asarray(res.t, dtype=float)
-        y = np.asarray(res.y, dtype=float)
-        yp = np.asarray(res.yp, dtype=float)
-        names = dae.output_names()
-        units = dae.output_units()
-
-        def values():
-            rows = np.array([dae.output_row(t[k], y[:, k], yp[:, k]) for k in range(t.size)])
-            return rows.T if rows.size else np.zeros((len(names), 0))
-
-        stats = dict(res.stats)
-        if wall_time is not None:
-            stats["wall_time"] = wall_time
-        if init_time is not None:
-            stats["init_time"] = init_time
-        log = []
-        for entry in res.event_log:
-            e = dict(entry)
-            idx = e.get("event")
-            if idx is not None and 0 <= idx < len(dae.events):
-                ev = dae.events[idx]
-                e["component"] = ev.component
-                e["switch"] = ev.switch.name
-                e.setdefault("name", ev.name)
-            log.append(e)
-        success, message = bool(res.success), str(res.message)
-        # a terminal switch that stands for a modelling error (e.g. flow into the
-        # plant through a sink-only boundary) ends the run as a failure with the
-        # component's own plain message
-        for e in reversed(log if getattr(res, "status", 1) == 1 else []):
-            idx = e.get("event")
-            if e.get("terminal") and idx is not None and 0 <= idx < len(dae.events):
-                text = dae.events[idx].message(e["t"])
-                if text:
-                    success, message = False, text
-                break
-        return cls(
-            t,
-            names,
-            units,
-            values,
-            y,
-            yp,
-            list(dae.names),
-            stats,
-            np.asarray(res.step_history),
-            log,
-            success,
-            message,
-            getattr(res, "sol", None),
-        )
-
-    @property
-    def results(self) -> dict:
-        if self._results is None:
+    # ---------------------------------------------------------------- Mapping
+    def _rows(self) -> dict:
+        if self._table is None:
             vals = self._values() if callable(self._values) else self._values
-            self._results = dict(zip(self.names, vals, strict=True))
-        return self._results
+            self._table = dict(zip(self.names, vals, strict=True))
+            self._values = None
+        return self._table
 
     def __getitem__(self, name):
         try:
-            return self.results[name]
+            return self._rows()[name]
         except KeyError:
             raise KeyError(
                 f"no output named {name!r}; e.g. {', '.join(self.names[:8])} ..."
             ) from None
 
+    def __iter__(self):
+        return iter(self.names)
+
+    def __len__(self):
+        return len(self.names)
+
     def __contains__(self, name):
-        return name in self.names
+        return name in self.units
 
-    def unit(self, name):
-        return self.units[name]
+    # --------------------------------------------------------------- pickling
+    def __getstate__(self):
+        self._rows()  # the lazy outputs need the System: compute them now
+        return dict(self.__dict__)
 
+    # ------------------------------------------------------------- conversion
     def to_dataframe(self):
-        """A pandas DataFrame indexed by t, one column per name (needs pandas)."""
+        """A pandas DataFrame indexed by t [s], one column per name; the units are in
+        ``df.attrs["units"]`` (name -> unit, "t" -> "s") and the restart flags in
+        ``df.attrs["restart"]``."""
         import pandas as pd
 
-        return pd.DataFrame(
-            {n: self.results[n] for n in self.names}, index=pd.Index(self.t, name="t")
+        rows = self._rows()
+        df = pd.DataFrame({n: rows[n] for n in self.names}, index=pd.Index(self.t, name="t"))
+        df.attrs["units"] = {"t": "s", **{n: self.units.get(n, "") for n in self.names}}
+        df.attrs["restart"] = self.restart.copy()
+        return df
+
+    def to_xarray(self):
+        """An xarray Dataset with dimension "t" [s]; each variable's ``attrs["units"]``
+        holds its unit; ``restart`` is a boolean variable over t."""
+        import xarray as xr
+
+        rows = self._rows()
+        data = {
+            n: xr.Variable(("t",), np.asarray(rows[n]), attrs={"units": self.units.get(n, "")})
+            for n in self.names
+        }
+        data["restart"] = xr.Variable(("t",), self.restart)
+        return xr.Dataset(
+            data,
+            coords={"t": xr.Variable(("t",), self.t, attrs={"units": "s"})},
+            attrs={"success": int(self.success), "message": self.message, "solver": self.solver},
         )
 
     def __repr__(self):
+        span = f"t = {self.t[0]:g} .. {self.t[-1]:g} s" if self.t.size else "no points"
         return (
-            f"PlantResults({self.t.size} points, t = {self.t[0]:g} .. {self.t[-1]:g} s, "
-            f"{len(self.names)} outputs, success={self.success})"
+            f"Results({self.t.size} points, {span}, {len(self.names)} outputs, "
+            f"success={self.success})"
         )
+
+
+def strictly_increasing(t):
+    """Indices of the rows to keep and the restart flags of the kept rows.
+
+    Of consecutive rows at equal t the last one is kept (the state after the
+    restart) and flagged."""
+    t = np.asarray(t, dtype=float)
+    if t.size == 0:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=bool)
+    same_as_prev = np.r_[False, t[1:] <= t[:-1]]
+    keep = np.flatnonzero(np.r_[~same_as_prev[1:], True])
+    return keep, same_as_prev[keep]

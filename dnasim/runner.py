@@ -105,12 +105,12 @@ class RunOutcome:
 # --------------------------------------------------------------------------- plant adapters
 
 
-def plant_output_layout(plant) -> tuple[list[str], dict[str, str], Any]:
+def plant_output_layout(system) -> tuple[list[str], dict[str, str], Any]:
     """Names, units and a row function ``row(t, y, yp) -> values`` for streaming,
-    from the plant's ``output_names()``, ``output_units()`` and ``output_row()``."""
-    names = list(plant.output_names())
-    units = dict(plant.output_units())
-    return names, units, plant.output_row
+    from the System's ``output_names()``, ``output_units()`` and ``output_row()``."""
+    names = list(system.output_names())
+    units = dict(system.output_units())
+    return names, units, system.output_row
 
 
 # --------------------------------------------------------------------------- run
@@ -150,51 +150,53 @@ class _Progress:
             self.bar = None
 
 
-def solve_streaming(plant, sim, callback, *, dense_output: bool = False):
-    """Integrate ``plant`` with the settings ``sim`` and hand every output point to
-    ``callback(t, y, yp)``; returns the solver's ``DAEResult``.
+def solve_streaming(system, sim, callback, *, dense_output: bool = False):
+    """Integrate ``system`` (a compiled plant) with the settings ``sim`` and hand
+    every output point to ``callback(t, y, yp)``; returns the solver's raw result
+    (a ``DAEResult``).
 
     ``dense_output=True`` (``run_plant(keep_rows=True)``) keeps the rows and the
     dense output in the result; otherwise a solver that has ``keep_output`` is
     asked not to keep the rows at all.
 
-    The same DAE, start and tolerances as ``Plant.simulate``, but for streaming:
-    no dense output (the Nordsieck pieces of every step), no ``PlantResults``
-    table, and ``sim.max_steps`` reaches ``solve_dae``. ``sim.t_eval()`` checks the
+    The same System, start and tolerances as ``dnasim.simulation``, but for
+    streaming: no dense output, no ``Results`` table. ``sim.t_eval()`` checks the
     number of output points against its limit before the grid exists.
     """
+    from dnasim.backends import NordsieckBDF, Problem
     from dnasim.solver import solve_dae
+    from dnasim.start import initial_values
 
-    dae = plant.assemble()
     t0, t_end = sim.t_start, sim.t_end
     t_eval = sim.t_eval()
-    y0, yp0 = plant.initial_values(t0, sim.start)
-    kwargs = {}
-    if getattr(sim, "max_steps", None) is not None:
-        kwargs["max_steps"] = int(sim.max_steps)
-    if not dense_output and "keep_output" in inspect.signature(solve_dae).parameters:
-        # a solver that can hand rows to the callback only: nothing grows with the rows
-        kwargs["keep_output"] = False
-    return solve_dae(
-        dae.residual,
-        (t0, t_end),
-        y0,
-        yp0,
-        algebraic=dae.algebraic,
-        jac_sparsity=dae.jac_sparsity,
-        calc_initial=False,
-        variable_names=dae.names,
+    y0, yp0 = initial_values(system, t0, sim.start)
+    solver = NordsieckBDF(
         rtol=sim.rtol,
-        atol=dae.atol_vector(sim.atol, y0),
+        atol_scaled=sim.atol_scaled,
         max_order=sim.max_order,
         max_step=sim.max_step if sim.max_step is not None else math.inf,
-        events=dae.events,
-        tstops=dae.tstops(t0, t_end),
+        dense_output=dense_output,
+    )
+    if getattr(sim, "max_steps", None) is not None:
+        solver.max_steps = int(sim.max_steps)
+    if not dense_output and "keep_output" in inspect.signature(solve_dae).parameters:
+        # a solver that can hand rows to the callback only: nothing grows with the rows
+        solver.keep_output = False
+    problem = Problem(
+        residual=system.residual,
+        t_span=(t0, t_end),
+        y0=y0,
+        yp0=yp0,
+        algebraic=system.algebraic,
+        jac_sparsity=system.jac_sparsity,
+        events=system.events,
+        tstops=system.tstops(t0, t_end),
+        atol=system.atol_vector(sim.atol_scaled, y0),
+        variable_names=list(system.names),
         t_eval=t_eval,
         callback=callback,
-        dense_output=dense_output,
-        **kwargs,
     )
+    return solver.solve(problem)
 
 
 def run_plant(
@@ -231,8 +233,10 @@ def run_plant(
             f"cannot create the output directory {out}: {exc.strerror or exc}", path=out
         ) from None
     clear_results(out)
+    from dnasim.compiler import compile as compile_plant
+
     sim = loaded.simulation
-    plant = loaded.plant
+    system = compile_plant(loaded.plant)
     t_start = time.perf_counter()
 
     state: dict[str, Any] = {
@@ -253,7 +257,7 @@ def run_plant(
         try:
             w = state["writer"]
             if w is None:
-                names, units, row = plant_output_layout(plant)
+                names, units, row = plant_output_layout(system)
                 header = [column_header("time", "s")] + [
                     column_header(n, units.get(n)) for n in names
                 ]
@@ -278,7 +282,7 @@ def run_plant(
     status, message, result = "finished", "", None
     try:
         try:
-            result = solve_streaming(plant, sim, callback, dense_output=keep_rows)
+            result = solve_streaming(system, sim, callback, dense_output=keep_rows)
             success = bool(getattr(result, "success", True))
             if not success:
                 status = "failed"

@@ -1,4 +1,7 @@
-"""Structural analysis of a plant, run by ``Plant.check()`` before any numerics.
+"""Structural analysis of a plant and its compiled System, before any numerics.
+
+``dnasim.compiler.check(plant)`` runs ``analyse_graph`` on the plant, builds the
+System once and runs ``analyse_system`` on it.
 
 Checks, in order (later ones need the earlier ones to pass):
 
@@ -26,6 +29,7 @@ Checks, in order (later ones need the earlier ones to pass):
 from __future__ import annotations
 
 from collections import defaultdict
+from dataclasses import dataclass, field
 
 import networkx as nx
 import numpy as np
@@ -34,29 +38,62 @@ from scipy.sparse.csgraph import maximum_bipartite_matching
 
 from dnasim.errors import PlantError
 
+__all__ = ["StructureReport", "analyse_graph", "analyse_system"]
 
-def analyse(plant, report) -> None:
+
+@dataclass
+class StructureReport:
+    """What ``Plant.check()`` found. ``ok`` is True when there are no errors."""
+
+    errors: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    n_equations: int = 0
+    n_unknowns: int = 0
+    n_differential: int = 0
+    unmatched_equations: list = field(default_factory=list)
+    unmatched_variables: list = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.errors
+
+    def __str__(self):
+        lines = [
+            f"structure: {self.n_equations} equations, {self.n_unknowns} unknowns "
+            f"({self.n_differential} differential)"
+        ]
+        lines += [f"error: {e}" for e in self.errors]
+        lines += [f"warning: {w}" for w in self.warnings]
+        if self.ok:
+            lines.append("ok")
+        return "\n".join(lines)
+
+    def raise_if_errors(self):
+        if self.errors:
+            raise PlantError(
+                "the plant is not well posed:\n" + "\n".join(f"  - {e}" for e in self.errors)
+            )
+
+
+def analyse_graph(plant, report) -> None:
+    """Checks 1-2, on the ``Plant`` alone (no system is built)."""
     _check_names(plant, report)
     _check_wiring(plant, report)
-    if report.errors:
-        return
-    from dnasim.assembly import AssembledDAE
 
-    try:
-        dae = AssembledDAE(plant)
-    except PlantError as err:
-        report.errors.append(str(err))
-        return
-    report.n_equations = dae.n_equations
-    report.n_unknowns = dae.n
-    report.n_differential = int(dae.differential.sum())
-    _check_counts(plant, dae, report)
-    _check_matching(plant, dae, report)
+
+def analyse_system(plant, system, report) -> None:
+    """Checks 3-6, on the compiled ``System`` of ``plant`` (the plant's graph is
+    used only to name nodes and ports in the messages)."""
+    report.n_equations = system.n_equations
+    report.n_unknowns = system.n
+    report.n_differential = int(system.differential.sum())
+    _check_counts(plant, system, report)
+    _check_matching(plant, system, report)
     _check_connectivity(plant, report)
 
 
 def _check_names(plant, report):
-    for name in sorted(set(plant._duplicates)):
+    for name in sorted(set(plant.duplicates)):
         report.errors.append(
             f"duplicate component name '{name}': each component needs its own name"
         )

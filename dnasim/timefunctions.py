@@ -42,6 +42,15 @@ class TimeFunction:
     def __call__(self, t: float) -> float:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def __eq__(self, other):
+        """Equal when of one type with equal attributes (plain data, e.g. for specs)."""
+        if type(other) is not type(self):
+            return NotImplemented
+        a, b = vars(self), vars(other)
+        return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+    __hash__ = None
+
     def scaled(self, factor: float, offset: float = 0.0) -> TimeFunction:
         """Return ``factor * f(t) + offset`` as a time function (same breakpoints)."""
         return _Affine(self, factor, offset)

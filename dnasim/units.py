@@ -115,6 +115,7 @@ _TABLE: dict[str, tuple[Dims, float, float, bool]] = {
     "mol": (_N, 1.0, 0.0, True),
     # pressure
     "Pa": (_PRESSURE, 1.0, 0.0, True),
+    "delta_Pa": (_PRESSURE, 1.0, 0.0, False),  # a pressure difference (may be <= 0)
     "bar": (_PRESSURE, 1e5, 0.0, True),
     "bara": (_PRESSURE, 1e5, 0.0, False),
     "atm": (_PRESSURE, 101325.0, 0.0, False),
@@ -452,3 +453,33 @@ def has_unit(text: str) -> bool:
     """Whether a quantity string carries a unit after its number ("120 bar": yes, "120": no)."""
     m = _NUMBER_RE.match(text)
     return bool(m and text[m.end() :].strip())
+
+
+def convert_quantity(v, unit: str, difference: bool = False, lenient_difference: bool = False):
+    """A number or a quantity string ("120 bar") in ``unit`` (SI), with the rules of
+    temperatures: ``difference`` (a delta_K parameter): "2 K" and "2 delta_degC" are
+    2 K, "2 degC" (an absolute temperature) is an error; ``lenient_difference``:
+    "10 degC" may mean 10 K (a sine's amplitude next to its mean in degC).
+    Raises ``UnitError``. Used by ``Param.si_value`` and the plant files alike."""
+    if not isinstance(v, str) or not has_unit(v):
+        return to_si(v, unit)
+    number, u = parse_quantity(v)
+    target = parse_unit(unit)
+    if u.offset:
+        absolute = number * u.scale + u.offset
+        if lenient_difference:  # "10 degC" as a difference is 10 K
+            return float(convert(number, Unit(u.dims, u.scale), unit))
+        if target.dims != u.dims:
+            hint = ""
+            if target.dims == parse_unit("1/K").dims:
+                hint = f"; a gain per kelvin is written '{number:g} 1/K'"
+            raise UnitError(
+                f"{v!r} is an absolute temperature ({absolute:g} K: degC and degF have an "
+                f"offset), but {target.dimension} is expected (unit {unit!r}){hint}"
+            )
+        if difference:
+            raise UnitError(
+                f"{v!r} is an absolute temperature ({absolute:g} K), but this parameter is a "
+                f"temperature difference: write '{number:g} K' or '{number:g} delta_degC'"
+            )
+    return to_si(v, unit)

@@ -328,8 +328,8 @@ def test_boundary_far_outside_the_medium_range_is_located(tmp_path):
 
 @pytest.mark.parametrize("value", ["inf", "nan", "-1", "0"])
 def test_atol_must_be_finite_and_positive(tmp_path, value):
-    res = invoke("run", PLANTS / "air_pipe.toml", "-o", tmp_path, "--atol", value)
-    assert_located(res, "--atol")
+    res = invoke("run", PLANTS / "air_pipe.toml", "-o", tmp_path, "--atol-scaled", value)
+    assert_located(res, "--atol-scaled")
 
 
 def test_sigterm_while_starting_exits_with_a_message(tmp_path):

@@ -60,9 +60,9 @@ def test_anti_windup_leaves_saturation_bumplessly():
     )
     res = plant.simulate(800.0, start="steady", rtol=1e-6)
     assert res.success
-    names = [e["name"] for e in res.event_log]
+    names = [e["name"] for e in res.events]
     assert names[:2] == ["pi.upper", "pi.upper"], names  # enter, then leave
-    t_in, t_out = res.event_log[0]["t"], res.event_log[1]["t"]
+    t_in, t_out = res.events[0]["t"], res.events[1]["t"]
     held = (res.t > t_in + 1e-9) & (res.t < t_out - 1e-9)
     # integrator held while saturated (to the integrator's tolerance)
     assert np.ptp(res["pi.m_I"][held]) < 1e-9

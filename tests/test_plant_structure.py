@@ -15,7 +15,7 @@ from dnasim.components import (
 )
 from dnasim.errors import PlantError
 from dnasim.examples import air_pipe_plant, attemperator_plant
-from dnasim.network import Plant
+from dnasim.plant import Plant
 
 
 class _Resistor(Component):

@@ -18,7 +18,7 @@ BASE = textwrap.dedent(
     t_end = "20 min"
     output_interval = "2 s"
     rtol = 1e-6
-    atol = 1e-8
+    atol_scaled = 1e-8
     max_order = 4
     start = "steady"
 
@@ -94,7 +94,7 @@ def test_base_file_is_valid_and_in_si():
     spec = spec_of(BASE)
     assert spec.name == "spray"
     s = spec.simulation
-    assert (s.t_end, s.output_interval, s.rtol, s.atol, s.max_order, s.start) == (
+    assert (s.t_end, s.output_interval, s.rtol, s.atol_scaled, s.max_order, s.start) == (
         1200.0,
         2.0,
         1e-6,
@@ -581,14 +581,16 @@ def test_load_plant_gives_the_python_api_plant():
     from pathlib import Path
 
     import dnasim
-    from dnasim.network import Plant
+    from dnasim.plant import Plant
 
     plant = dnasim.load_plant(Path(__file__).resolve().parents[1] / "plants" / "air_pipe.toml")
     assert isinstance(plant, Plant)
     assert set(plant.components) == {"inlet", "pipe", "valve", "outlet"}
     s = plant.simulation
     assert s.start == "given" and s.t_end == 1800.0
-    res = plant.simulate(60.0, rtol=s.rtol, atol=s.atol, max_order=s.max_order, start=s.start)
+    res = plant.simulate(
+        60.0, rtol=s.rtol, atol_scaled=s.atol_scaled, max_order=s.max_order, start=s.start
+    )
     assert res.success
     df = res.to_dataframe()
     assert "pipe.T_out" in df.columns and len(df) == len(res.t)

@@ -25,10 +25,10 @@ Local variable names seen by a component:
 * ``"<signal input>"`` for each signal input (an alias of another component's
   output variable).
 
-The framework (``dnasim.assembly``) maps these local names into the global
+The framework (``dnasim.system``) maps these local names into the global
 vector. Components never see the solver.
 
-Flows and enthalpies (stream variables, see ``dnasim.assembly``): a fluid port
+Flows and enthalpies (stream variables, see ``dnasim.system``): a fluid port
 is an ``"inlet"`` or an ``"outlet"``; this is only the sign convention of the
 port's flow variable (positive in the design direction: into the component at
 an inlet, out of it at an outlet). Flow may go either way. A node's ``h`` is the
@@ -106,6 +106,51 @@ class Param:
     #: the power of the measured signal's unit in this parameter's unit: a
     #: controller gain [output unit per measured unit] is -1, a set point 1
     per_signal: int = 0
+
+    def range_problem(self, x: float) -> tuple[str, str] | None:
+        """The one range check of a parameter value x [SI], used by the Python API
+        and the plant files alike: ``None`` when x is allowed, else (kind, text)
+        with kind "physical" (a pressure, volume, area, mass or absolute
+        temperature <= 0 when the parameter has no positive lower bound) or "range"
+        (below ``min`` or above ``max``). A difference ("delta_Pa", "delta_K") may
+        be <= 0 within its bounds."""
+        what = POSITIVE_UNITS.get(self.unit)
+        if what is not None and (self.min is None or self.min <= 0) and x <= 0:
+            return (
+                "physical",
+                f"{self.name} is a {what} and must be greater than 0 {self.unit} "
+                f"(got {x:g} {self.unit})",
+            )
+        if self.min is not None and x < self.min:
+            return (
+                "range",
+                f"{self.name} = {x:g} {self.unit} is below its minimum {self.min:g} "
+                f"(must be at least {self.min:g} {self.unit})",
+            )
+        if self.max is not None and x > self.max:
+            return (
+                "range",
+                f"{self.name} = {x:g} {self.unit} is above its maximum {self.max:g} "
+                f"(must be at most {self.max:g} {self.unit})",
+            )
+        return None
+
+    def si_value(self, value):
+        """A number or a unit string ("120 bar", "200 degC") in this parameter's SI
+        unit; other values are returned as they are. Raises ``UnitError``."""
+        if not isinstance(value, str):
+            return value
+        from dnasim.units import convert_quantity
+
+        unit = self.unit
+        difference = unit.startswith("delta_")
+        if difference:
+            unit = unit[len("delta_") :]
+        return convert_quantity(value, unit, difference)
+
+
+#: units whose quantities must be > 0 (absolute temperature, pressure, ...)
+POSITIVE_UNITS = {"Pa": "pressure", "m3": "volume", "m2": "area", "kg": "mass", "K": "temperature"}
 
 
 @dataclass(frozen=True)
@@ -240,14 +285,17 @@ class LocalVector:
     """A component's view of the global vector: ``x["inlet.p"]``, ``x["M"]``.
 
     Scalars come back as floats, vector variables as numpy arrays (views).
-    Assignment writes through (used for initial guesses).
+    Assignment writes through (used for initial guesses). ``modes``: the
+    component's discrete modes (a dict owned by the ``System``; e.g. a
+    controller's "free"/"high"/"low"), read and written by the component.
     """
 
-    __slots__ = ("data", "index")
+    __slots__ = ("data", "index", "modes")
 
-    def __init__(self, data: np.ndarray, index: dict):
+    def __init__(self, data: np.ndarray, index: dict, modes: dict | None = None):
         self.data = data
         self.index = index
+        self.modes = {} if modes is None else modes
 
     def __getitem__(self, name):
         k = self.index[name]
@@ -271,16 +319,11 @@ def _check_number(comp, param, value):
     value = float(value)
     if not np.isfinite(value):
         raise PlantError(f"component '{comp}': parameter '{param.name}' is not finite ({value!r})")
-    if param.min is not None and value < param.min:
-        raise PlantError(
-            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is below its "
-            f"minimum {param.min:g}"
-        )
-    if param.max is not None and value > param.max:
-        raise PlantError(
-            f"component '{comp}': parameter '{param.name}' = {value:g} {param.unit} is above its "
-            f"maximum {param.max:g}"
-        )
+    problem = param.range_problem(value)
+    if problem is not None:
+        kind, text = problem
+        lead = "is below its minimum: " if kind == "physical" else ""
+        raise PlantError(f"component '{comp}': parameter '{param.name}' {lead}{text}")
     return value
 
 
@@ -333,13 +376,26 @@ class Component:
                     "is required" + (f" ({p.doc})" if p.doc else "")
                 )
             self.params[p.name] = self._validate(p, value)
-        self.medium = None  # set by the plant (dnasim.media medium object)
+        self.medium = None  # set by dnasim.compiler (dnasim.media medium object)
         self.medium_name = self.params.get("medium")
+        #: port name -> medium object, set by dnasim.compiler (media may differ per port)
+        self.port_media: dict = {}
         self.setup()
 
     def _validate(self, p: Param, value):
         if value is None:
             return None
+        if p.kind not in ("string", "bool") and isinstance(value, str):
+            from dnasim.units import UnitError
+
+            try:
+                value = p.si_value(value)  # "120 bar" from Python as from a plant file
+            except UnitError as err:
+                raise PlantError(
+                    f"component '{self.name}': parameter '{p.name}' [{p.unit}]: {err}"
+                ) from None
+            if p.kind == "int" and value == int(value):
+                value = int(value)
         if p.kind == "string":
             if not isinstance(value, str):
                 raise PlantError(
@@ -451,14 +507,36 @@ class Component:
         the initial state (the parameters that define it, e.g. a pipe's T0, are
         documented per component)."""
 
-    def reset_discrete_state(self) -> None:
-        """Hook: put discrete state (modes) back to its default before a simulation."""
+    def reset_discrete_state(self, modes: dict) -> None:
+        """Hook: put the discrete modes back to their default before a simulation.
+
+        ``modes`` is this component's dict in ``System.modes`` (the same object as
+        ``LocalVector.modes`` in ``residual`` and the switch functions); a component
+        keeps no mode on itself, so one component may serve several Systems."""
 
     def init_discrete_state(self, t0: float, x: LocalVector, xp: LocalVector) -> bool:
         """Hook: choose the discrete state that fits the initial values.
 
         Return True when it changed (the plant then re-solves the initial state)."""
         return False
+
+    # ------------------------------------------------------------------ media
+    def medium_groups(self) -> list[tuple[str, str, list[str]]]:
+        """Groups of fluid ports that carry one fluid: [(group, parameter, ports)].
+
+        ``parameter`` names the string parameter that may fix the group's fluid
+        (otherwise it comes from the nodes, see ``dnasim.compiler.resolve_media``).
+        Default: one group "fluid" of all fluid ports, fixed by ``medium``. A
+        component with two separate streams (a heat exchanger) returns two groups,
+        and its ``port_media`` then holds different media on different ports."""
+        if not self.USES_MEDIUM:
+            return []
+        ports = [p.name for p in self.fluid_ports()]
+        return [("fluid", "medium", ports)] if ports else []
+
+    def port_medium(self, port: str):
+        """The medium object at fluid port ``port`` (set by ``dnasim.compiler``)."""
+        return self.port_media[port]
 
     # ---------------------------------------------------------------- helpers
     def port(self, name: str) -> FluidPort:

@@ -79,10 +79,14 @@ class PIController(Component):
 
             raise PlantError(f"component '{self.name}': z_max must be greater than z_min")
         self.sign = 1.0 if self.params["error_sign"] == "measured-setpoint" else -1.0
-        self.mode = "free"
 
-    def reset_discrete_state(self):
-        self.mode = "free"
+    def reset_discrete_state(self, modes):
+        modes["mode"] = "free"
+
+    @staticmethod
+    def _mode(x):
+        """The mode, from the System-owned dict (``LocalVector.modes``)."""
+        return x.modes.get("mode", "free")
 
     def variables(self):
         return [
@@ -103,10 +107,11 @@ class PIController(Component):
     def residual(self, t, x, xp):
         e = x["e"]
         P = self.params
-        hold = P["anti_windup"] and self.mode != "free"
-        if self.mode == "free":
+        mode = self._mode(x)
+        hold = P["anti_windup"] and mode != "free"
+        if mode == "free":
             out = x["z"] - (x["m_p"] + x["m_I"])
-        elif self.mode == "high":
+        elif mode == "high":
             out = x["z"] - P["z_max"]
         else:
             out = x["z"] - P["z_min"]
@@ -126,7 +131,7 @@ class PIController(Component):
     def _upper(self, t, x, xp):
         v = x["m_p"] + x["m_I"]
         z_max = self.params["z_max"]
-        if self.mode != "high":
+        if self._mode(x) != "high":
             return z_max - v
         if self.params["anti_windup"]:
             # leave when the error turns to drive the output down
@@ -136,27 +141,27 @@ class PIController(Component):
     def _lower(self, t, x, xp):
         v = x["m_p"] + x["m_I"]
         z_min = self.params["z_min"]
-        if self.mode != "low":
+        if self._mode(x) != "low":
             return v - z_min
         if self.params["anti_windup"]:
             return -self._gain_sign() * x["e"]
         return z_min - v
 
     def _toggle_upper(self, t, x, xp):
-        if self.mode == "high":
-            self.mode = "free"
+        if self._mode(x) == "high":
+            x.modes["mode"] = "free"
             if self.params["anti_windup"]:
                 x["m_I"] = self.params["z_max"] - x["m_p"]  # bumpless: v = z_max
         else:
-            self.mode = "high"
+            x.modes["mode"] = "high"
 
     def _toggle_lower(self, t, x, xp):
-        if self.mode == "low":
-            self.mode = "free"
+        if self._mode(x) == "low":
+            x.modes["mode"] = "free"
             if self.params["anti_windup"]:
                 x["m_I"] = self.params["z_min"] - x["m_p"]
         else:
-            self.mode = "low"
+            x.modes["mode"] = "low"
 
     def switches(self):
         return [
@@ -166,14 +171,15 @@ class PIController(Component):
 
     def init_discrete_state(self, t0, x, xp):
         v = x["m_p"] + x["m_I"]
-        old = self.mode
+        old = self._mode(x)
         if v > self.params["z_max"]:
-            self.mode = "high"
+            mode = "high"
         elif v < self.params["z_min"]:
-            self.mode = "low"
+            mode = "low"
         else:
-            self.mode = "free"
-        return self.mode != old
+            mode = "free"
+        x.modes["mode"] = mode
+        return mode != old
 
     def initial_guess(self, t0, x):
         x["m_I"] = self.params["integral0"]

@@ -44,14 +44,14 @@ class HeatExchanger(Component):
         Param("cold_k", "1/m4", None, "cold side friction coefficient (dp = k m|m|/rho)", min=0.0),
         Param(
             "hot_dp_nominal",
-            "Pa",
+            "delta_Pa",
             1e4,
             "hot side pressure drop at m_nominal (used when hot_k is not given)",
             min=0.0,
         ),
         Param(
             "cold_dp_nominal",
-            "Pa",
+            "delta_Pa",
             1e4,
             "cold side pressure drop at m_nominal (used when cold_k is not given)",
             min=0.0,
@@ -75,7 +75,23 @@ class HeatExchanger(Component):
         ),
         Param("hot_T0", "K", None, "initial hot fluid temperature (given start)", min=0.0),
         Param("cold_T0", "K", None, "initial cold fluid temperature (given start)", min=0.0),
-        Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
+        Param(
+            "medium",
+            "1",
+            None,
+            "fluid name on both sides (default: from the network)",
+            kind="string",
+        ),
+        Param(
+            "hot_medium", "1", None, "fluid name on the hot side (overrides medium)", kind="string"
+        ),
+        Param(
+            "cold_medium",
+            "1",
+            None,
+            "fluid name on the cold side (overrides medium)",
+            kind="string",
+        ),
     )
     FLUID_PORTS = (
         FluidPort("hot_in", "inlet", "hot_m[0]", "resistance", "hot fluid in"),
@@ -150,12 +166,31 @@ class HeatExchanger(Component):
                 )
         return out
 
+    def medium_groups(self):
+        """Two streams, two media: the hot ports and the cold ports."""
+        P = self.params
+        return [
+            (
+                side,
+                f"{side}_medium" if P[f"{side}_medium"] else "medium",
+                [f"{side}_in", f"{side}_out"],
+            )
+            for side in ("hot", "cold")
+        ]
+
+    def side_medium(self, side):
+        """The medium object of one stream ("hot" or "cold")."""
+        return self.port_media.get(f"{side}_in")
+
     def switches(self):
-        if not (self.params["phase_switches"] and is_condensable(self.medium)):
+        if not self.params["phase_switches"]:
             return []
-        return self.channels["hot"].switches(self.medium) + self.channels["cold"].switches(
-            self.medium
-        )
+        out = []
+        for side in ("hot", "cold"):
+            medium = self.side_medium(side)
+            if medium is not None and is_condensable(medium):
+                out += self.channels[side].switches(medium)
+        return out
 
     def variables(self):
         out = []
@@ -178,8 +213,9 @@ class HeatExchanger(Component):
     def residual(self, t, x, xp):
         T_w = x["T_w"]
         hot, cold = self.channels["hot"], self.channels["cold"]
-        blocks = hot.residual_blocks(x, xp, hot.evaluate(self.medium, x), T_w)
-        blocks += cold.residual_blocks(x, xp, cold.evaluate(self.medium, x), T_w[::-1])
+        mh, mc = self.side_medium("hot"), self.side_medium("cold")
+        blocks = hot.residual_blocks(x, xp, hot.evaluate(mh, x), T_w)
+        blocks += cold.residual_blocks(x, xp, cold.evaluate(mc, x), T_w[::-1])
         wall = self.params["C_wall"] / self.n * xp["T_w"] - (x["hot_Q"] + x["cold_Q"][::-1])
         return np.concatenate(blocks + [wall])
 
@@ -191,8 +227,8 @@ class HeatExchanger(Component):
         ]
 
     def output_values(self, t, x, xp):
-        _, _, Th, _, _ = self.channels["hot"].evaluate(self.medium, x)
-        _, _, Tc, _, _ = self.channels["cold"].evaluate(self.medium, x)
+        _, _, Th, _, _ = self.channels["hot"].evaluate(self.side_medium("hot"), x)
+        _, _, Tc, _, _ = self.channels["cold"].evaluate(self.side_medium("cold"), x)
         return [Th[-2], Tc[-2], float(np.sum(x["hot_Q"]))]
 
     def initial_guess(self, t0, x):
@@ -204,8 +240,8 @@ class HeatExchanger(Component):
             p = p_in + (x[f"{side}_out.p"] - p_in) * frac
             T0 = self.params[f"{side}_T0"]
             if T0 is not None:
-                h = np.array([self.medium.h_pT(pi, T0) for pi in p])
+                h = np.array([self.side_medium(side).h_pT(pi, T0) for pi in p])
             else:
                 h = np.full(n, h_in)
-            T[side] = ch.guess(x, self.medium, p, h, self.params["m_nominal"])
+            T[side] = ch.guess(x, self.side_medium(side), p, h, self.params["m_nominal"])
         x["T_w"] = 0.5 * (T["hot"] + T["cold"][::-1])

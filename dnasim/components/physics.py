@@ -214,7 +214,7 @@ def energy_in(m, h_node, h_own, eps):
     (its ``h_out``). For m >> eps this is m h_node, for m << -eps it is m h_own.
     Every component computes its port energy flows with this one function; with
     the node's mixing equation this makes energy conservation across a node exact
-    (proof in ``dnasim.assembly``). Exactly m h_node for m >= eps, m h_own for
+    (proof in ``dnasim.system``). Exactly m h_node for m >= eps, m h_own for
     m <= -eps."""
     return upwind_weight(m, eps) * h_node - upwind_weight(-np.asarray(m, dtype=float), eps) * h_own
 

@@ -53,7 +53,9 @@ class Valve(Component):
             min=0.0,
             max=1.0,
         ),
-        Param("dp_reg", "Pa", 10.0, "regularisation pressure difference near dp = 0", min=0.0),
+        Param(
+            "dp_reg", "delta_Pa", 10.0, "regularisation pressure difference near dp = 0", min=0.0
+        ),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
     )

@@ -62,6 +62,17 @@ class Medium(ABC):
     #: :meth:`saturation_enthalpies` and :meth:`h_px`).
     condensable: bool = False
 
+    #: (fluid, backend) when the instance came from ``get_medium``: it then pickles
+    #: as that call and unpickles as the shared instance (no backend state pickled)
+    registry_args: tuple[str, str] | None = None
+
+    def __reduce_ex__(self, protocol):
+        if self.registry_args is not None:
+            from dnasim.media.registry import get_medium
+
+            return (get_medium, self.registry_args)
+        return super().__reduce_ex__(protocol)
+
     def __init__(self, name: str, backend: str, *, cache_size: int = 4096) -> None:
         self.name = name
         self.backend = backend

@@ -1,4 +1,15 @@
-"""Assembly of a plant into one DAE F(t, y, y') = 0.
+"""System: a compiled plant, one DAE F(t, y, y') = 0 over plant-wide arrays.
+
+Made by ``dnasim.compiler.compile(plant)``; holds the components, the index maps,
+the node and port media, the sparsity, the switch functions and the discrete
+modes, and no reference back to the ``Plant``. What a solver needs:
+``residual(t, y, yp)``, ``jac_sparsity``, ``algebraic``, ``events``,
+``tstops(t0, t_end)``; what output needs: ``output_names()``,
+``output_units()``, ``output_row(t, y, yp)``.
+
+Pickling: a System pickles. The media pickle as their registry names
+(``Medium.__reduce__``); the switch functions (``events``, closures over the
+components) are not pickled but rebuilt from the components on unpickling.
 
 Global vector y:
   * for each node (in connection order): p [Pa], h [J/kg] (names "node.p", "node.h");
@@ -69,15 +80,16 @@ NODE_H_NOMINAL = 1e5  # J/kg
 class ComponentBlock:
     """A component's place in the global system."""
 
-    def __init__(self, comp, gidx, index, eq_slice, local_names):
+    def __init__(self, comp, gidx, index, eq_slice, local_names, modes):
         self.comp = comp
+        self.modes = modes  # the System's dict of this component's discrete modes
         self.gidx = gidx  # local position -> global variable index
         self.index = index  # local name -> local position (int) or slice
         self.eq_slice = eq_slice
         self.local_names = local_names
 
     def local(self, v):
-        return LocalVector(v[self.gidx], self.index)
+        return LocalVector(v[self.gidx], self.index, self.modes)
 
 
 class PlantEvent:
@@ -134,16 +146,28 @@ class PlantEvent:
         return y, np.array(yp, dtype=float)
 
 
-class AssembledDAE:
-    """The plant as a DAE: residual, sparsity, masks, events, tstops, names."""
+class System:
+    """The plant as a DAE: residual, sparsity, masks, events, tstops, names.
 
-    def __init__(self, plant):
-        self.plant = plant
-        self._build()
+    ``plant``: read while building, not kept; ``node_media``: node name ->
+    medium object (or None); ``port_media``: (component, port) -> medium object.
+    Built once by ``dnasim.compiler.compile``.
+    """
+
+    def __init__(self, plant, node_media=None, port_media=None):
+        self.name = plant.name
+        self.components = dict(plant.components)
+        self.node_names = list(plant.node_names())
+        self.connections = dict(plant.connections)  # (component, port) -> node
+        self.node_media = dict(node_media or {})
+        self.port_media = dict(port_media or {})
+        #: discrete modes, component name -> {key: value}; the components read and
+        #: write them through ``LocalVector.modes`` (e.g. a controller's saturation)
+        self.modes = {name: {} for name in self.components}
+        self._build(plant)
 
     # ------------------------------------------------------------------ build
-    def _build(self):
-        plant = self.plant
+    def _build(self, plant):
         names, units, nominal, owner, accumulator = [], [], [], [], []
         self.node_index = {}
         for node in plant.node_names():
@@ -226,6 +250,7 @@ class AssembledDAE:
                     index,
                     slice(start, len(eq_names)),
                     local_names,
+                    self.modes[comp.name],
                 )
             )
 
@@ -298,7 +323,25 @@ class AssembledDAE:
         self.algebraic = ~self.differential
         self._checked_lengths = False
 
-        self.events = [PlantEvent(b, sw) for b in self.blocks for sw in b.comp.switches()]
+        self.events = self._make_events()
+
+    def _make_events(self):
+        return [PlantEvent(b, sw) for b in self.blocks for sw in b.comp.switches()]
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("events", None)  # closures over the components: rebuilt on unpickling
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self.events = self._make_events()
+
+    def reset_modes(self) -> None:
+        """Every component's discrete modes back to their start (``Component.reset_modes``)."""
+        for b in self.blocks:
+            self.modes[b.comp.name].clear()
+            b.comp.reset_discrete_state(self.modes[b.comp.name])
 
     def block(self, comp_name) -> ComponentBlock:
         for b in self.blocks:
@@ -320,8 +363,8 @@ class AssembledDAE:
         """F(t, y, y') for the whole plant (length n)."""
         F = np.empty(self.n_equations)
         for b in self.blocks:
-            x = LocalVector(y[b.gidx], b.index)
-            xp = LocalVector(yp[b.gidx], b.index)
+            x = LocalVector(y[b.gidx], b.index, b.modes)
+            xp = LocalVector(yp[b.gidx], b.index, b.modes)
             r = b.comp.residual(t, x, xp)
             if not self._checked_lengths:
                 nr = np.size(r)
@@ -359,7 +402,7 @@ class AssembledDAE:
     def tstops(self, t0: float, t_end: float) -> list[float]:
         """Breakpoints of all time-function parameters inside (t0, t_end)."""
         out = set()
-        for comp in self.plant.components.values():
+        for comp in self.components.values():
             for b in comp.breakpoints():
                 if t0 < b < t_end:
                     out.add(float(b))
@@ -371,7 +414,7 @@ class AssembledDAE:
         if not hasattr(self, "_output_names"):
             names = list(self.names)
             units = dict(self.units)
-            for node in self.plant.node_names():
+            for node in self.node_names:
                 names.append(f"{node}.T")
                 units[f"{node}.T"] = "K"
             for b in self.blocks:
@@ -390,9 +433,9 @@ class AssembledDAE:
         """One output row (order of ``output_names()``) from (t, y, y')."""
         row = [np.asarray(y, dtype=float)]
         node_T = []
-        for node in self.plant.node_names():
+        for node in self.node_names:
             k = self.node_index[node]
-            medium = self.plant.node_medium(node)
+            medium = self.node_media.get(node)
             try:
                 node_T.append(
                     medium.state(float(y[k]), float(y[k + 1])).T if medium is not None else np.nan

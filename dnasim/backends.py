@@ -1,0 +1,140 @@
+"""Solver backends: objects that integrate a ``Problem`` (F(t, y, y') = 0 and nothing
+of the plant) and return a DAEResult-like record.
+
+    NordsieckBDF(rtol=1e-6, atol_scaled=1e-8, max_order=4, ...)   # dnasim.solve_dae
+    IDA(rtol=1e-6, atol_scaled=1e-8, ...)                          # SUNDIALS, scikit-sundae
+
+Contract: ``backend.name`` (str), ``backend.rtol``, ``backend.atol_scaled`` and
+``backend.solve(problem)`` returning an object with t, y, yp, success, status,
+message, event_log, stats, step_history, sol. A failure is returned (success
+False), not raised. ``dnasim.simulation.simulate`` turns it into ``Results``.
+
+Tolerances (one meaning everywhere above ``solve_dae``): ``rtol`` relative,
+``atol_scaled`` per unit of each variable's scale, atol_i = atol_scaled *
+max(nominal_i, |y0_i|) (``System.atol_vector``); ``Problem.atol`` is that
+vector. Defaults rtol = 1e-6, atol_scaled = 1e-8.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dnasim.errors import DAEError
+
+__all__ = ["ATOL_SCALED", "IDA", "NordsieckBDF", "Problem", "RTOL", "SOLVER_OPTIONS"]
+
+RTOL = 1e-6  # default relative tolerance
+ATOL_SCALED = 1e-8  # default absolute tolerance per unit of each variable's scale
+#: the keywords of simulate() that configure the default backend
+SOLVER_OPTIONS = ("rtol", "atol_scaled", "max_order", "max_step", "max_steps", "h0")
+
+
+@dataclass
+class Problem:
+    """What a solver backend sees: F(t, y, y') = 0 and nothing of the plant."""
+
+    residual: object
+    t_span: tuple[float, float]
+    y0: np.ndarray
+    yp0: np.ndarray
+    algebraic: np.ndarray
+    jac_sparsity: object
+    events: list
+    tstops: list
+    atol: np.ndarray  # absolute tolerance per variable
+    variable_names: list
+    t_eval: object = None
+    callback: object = None
+    #: the System, only for IDA's re-initialisation after a restart (the damped
+    #: Newton of dnasim.initialization needs its nominal scales and patterns)
+    system: object = None
+
+
+@dataclass
+class NordsieckBDF:
+    """dnasim's own solver (``dnasim.solve_dae``): Nordsieck BDF orders 1..5 with
+    Milne's error estimate, modified Newton, switch location and restarts."""
+
+    rtol: float = RTOL
+    atol_scaled: float = ATOL_SCALED
+    max_order: int = 4
+    max_step: float = math.inf
+    h0: float | None = None
+    max_steps: int = 500_000
+    exclude_algebraic_from_error: bool = False
+    dense_output: bool = True
+    #: False: the rows go to the callback only (a solve_dae with ``keep_output``)
+    keep_output: bool = True
+    name: str = field(default="NordsieckBDF", init=False)
+
+    def solve(self, pb: Problem):
+        from dnasim.solver import solve_dae
+
+        extra = {} if self.keep_output else {"keep_output": False}
+        try:
+            return solve_dae(
+                pb.residual,
+                pb.t_span,
+                pb.y0,
+                pb.yp0,
+                algebraic=pb.algebraic,
+                jac_sparsity=pb.jac_sparsity,
+                calc_initial=False,
+                variable_names=pb.variable_names,
+                rtol=self.rtol,
+                atol=pb.atol,
+                max_order=self.max_order,
+                max_step=self.max_step,
+                h0=self.h0,
+                events=pb.events,
+                tstops=pb.tstops,
+                t_eval=pb.t_eval,
+                callback=pb.callback,
+                exclude_algebraic_from_error=self.exclude_algebraic_from_error,
+                dense_output=self.dense_output,
+                max_steps=self.max_steps,
+                **extra,
+            )
+        except DAEError as err:
+            res = getattr(err, "result", None)
+            if res is None:
+                raise
+            return res
+
+
+@dataclass
+class IDA:
+    """SUNDIALS IDA through scikit-sundae (optional dependency), with the plant's
+    semantics: it stops at every tstop and switch crossing, runs the switch's
+    action and re-initialises by dnasim's damped Newton."""
+
+    rtol: float = RTOL
+    atol_scaled: float = ATOL_SCALED
+    max_order: int = 4
+    max_step: float = math.inf
+    h0: float | None = None
+    max_steps: int = 100_000
+    name: str = field(default="IDA", init=False)
+
+    def solve(self, pb: Problem):
+        from dnasim.testing.ida_plant import solve_with_ida
+
+        return solve_with_ida(
+            pb.system,
+            pb.t_span,
+            pb.y0,
+            pb.yp0,
+            rtol=self.rtol,
+            atol=pb.atol,
+            max_order=self.max_order,
+            max_step=self.max_step,
+            h0=self.h0,
+            events=pb.events,
+            tstops=pb.tstops,
+            t_eval=pb.t_eval,
+            callback=pb.callback,
+            max_num_steps=self.max_steps,
+        )

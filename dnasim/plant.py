@@ -1,0 +1,190 @@
+"""The plant: components wired through named nodes (DNA's network view).
+
+Nodes carry the pressure p [Pa] and the specific enthalpy h [J/kg] of the
+fluid flowing into them (mixed); components carry the mass flows. A node has
+no volume: its equations are the mass balance (sum of flows in = sum of flows
+out) and the mixing equation, which makes h the flow-weighted mean of the
+enthalpies the components deliver into the node (upwind by the actual flow, in
+either direction; see ``dnasim.system``). Signal ports are linked output to
+input. The plant is held as a networkx multigraph (``Plant.graph``) with one
+vertex per component ("component", name) and per node ("node", name).
+
+``Plant`` is the graph only: it builds and answers queries. ``dnasim.compiler``
+turns it into a ``System`` (media, index maps, residual, sparsity, switches);
+``dnasim.simulation`` integrates a System. ``check``, ``compile`` and ``simulate``
+below are shorthands for those functions and keep no state.
+
+    plant = Plant("demo")
+    plant.add(PressureBoundary("src", p=2e5, T=600.0, medium="Air"))
+    plant.add(Pipe("pipe1", V=0.1, kA=50.0, k=1e3, C_wall=5e4))
+    plant.connect("src.port", "a"); plant.connect("pipe1.inlet", "a")
+    ...
+    print(plant.check())
+    res = plant.simulate(100.0)
+    res["pipe1.T_out"]
+"""
+
+from __future__ import annotations
+
+import networkx as nx
+
+from dnasim.components.base import Component
+from dnasim.errors import PlantError
+
+__all__ = ["Plant"]
+
+
+class Plant:
+    """A network of components. See the module docstring."""
+
+    def __init__(self, name: str = "plant", medium: str | None = None):
+        self.name = name
+        self.default_medium = medium
+        self.components: dict[str, Component] = {}
+        self.connections: dict[tuple[str, str], str] = {}  # (component, port) -> node
+        self.links: dict[tuple[str, str], tuple[str, str]] = {}  # (comp, input) -> (comp, output)
+        self._duplicates: list[str] = []
+
+    # ------------------------------------------------------------ building
+    def add(self, component: Component) -> Component:
+        """Add a component; returns it. A duplicate name is reported by ``check()``."""
+        if not isinstance(component, Component):
+            raise PlantError(f"plant '{self.name}': add() takes a component, got {component!r}")
+        if component.name in self.components:
+            self._duplicates.append(component.name)
+        else:
+            self.components[component.name] = component
+        return component
+
+    def _split(self, ref: str, what: str):
+        if not isinstance(ref, str) or ref.count(".") != 1:
+            raise PlantError(f"plant '{self.name}': expected 'component.{what}', got {ref!r}")
+        comp, port = ref.split(".")
+        if comp not in self.components:
+            raise PlantError(f"plant '{self.name}': no component named '{comp}' (in {ref!r})")
+        return self.components[comp], port
+
+    def connect(self, port_ref: str, node: str) -> None:
+        """Bind fluid port "comp.port" to the node named ``node`` (created on first use)."""
+        comp, port = self._split(port_ref, "port")
+        names = [p.name for p in comp.fluid_ports()]
+        if port not in names:
+            raise PlantError(
+                f"component '{comp.name}' ({type(comp).__name__}) has no fluid port '{port}'; "
+                f"its fluid ports are: {', '.join(names) or 'none'}"
+            )
+        if not isinstance(node, str) or not node or "." in node:
+            raise PlantError(
+                f"plant '{self.name}': node name must be a non-empty string without '.', got "
+                f"{node!r}"
+            )
+        key = (comp.name, port)
+        if key in self.connections:
+            raise PlantError(
+                f"component '{comp.name}': port '{port}' is already connected to node "
+                f"'{self.connections[key]}'"
+            )
+        self.connections[key] = node
+
+    def link(self, output_ref: str, input_ref: str) -> None:
+        """Feed signal output "comp.output" into signal input "comp.input"."""
+        src, out = self._split(output_ref, "output")
+        dst, inp = self._split(input_ref, "input")
+        outs = [s.name for s in src.signal_outputs()]
+        if out not in outs:
+            raise PlantError(
+                f"component '{src.name}' ({type(src).__name__}) has no signal output '{out}'; "
+                f"its signal outputs are: {', '.join(outs) or 'none'}"
+            )
+        ins = [s.name for s in dst.signal_inputs()]
+        if inp not in ins:
+            raise PlantError(
+                f"component '{dst.name}' ({type(dst).__name__}) has no signal input '{inp}'; "
+                f"its signal inputs are: {', '.join(ins) or 'none'}"
+            )
+        if (dst.name, inp) in self.links:
+            raise PlantError(f"component '{dst.name}': signal input '{inp}' is already linked")
+        self.links[(dst.name, inp)] = (src.name, out)
+
+    # ------------------------------------------------------------- queries
+    def node_names(self) -> list[str]:
+        seen = {}
+        for node in self.connections.values():
+            seen.setdefault(node, None)
+        return list(seen)
+
+    def ports_at(self, node: str):
+        """[(component name, FluidPort)] attached to ``node``."""
+        out = []
+        for (cname, pname), n in self.connections.items():
+            if n == node:
+                out.append((cname, self.components[cname].port(pname)))
+        return out
+
+    @property
+    def graph(self) -> nx.MultiGraph:
+        """Components and nodes as vertices; fluid connections and signal links as edges."""
+        g = nx.MultiGraph()
+        for name, comp in self.components.items():
+            g.add_node(("component", name), type=type(comp).__name__)
+        for node in self.node_names():
+            g.add_node(("node", node))
+        for (cname, pname), node in self.connections.items():
+            g.add_edge(("component", cname), ("node", node), key=pname, kind="fluid")
+        for (dname, inp), (sname, out) in self.links.items():
+            g.add_edge(
+                ("component", sname), ("component", dname), key=f"{out}->{inp}", kind="signal"
+            )
+        return g
+
+    @property
+    def duplicates(self) -> list[str]:
+        """Names given to more than one ``add()`` (the later ones were not added)."""
+        return list(self._duplicates)
+
+    def medium_units(self):
+        """The groups of ports that carry one fluid, per component.
+
+        ``[(component name, group, medium parameter value or None, [port names])]``
+        (see ``Component.medium_groups``)."""
+        out = []
+        for name, comp in self.components.items():
+            for group, param, ports in comp.medium_groups():
+                out.append((name, group, comp.params.get(param), list(ports)))
+        return out
+
+    # ---------------------------------------------------- shorthands (no state)
+    def check(self):
+        """Shorthand for ``dnasim.compiler.check(plant)[0]``: the ``StructureReport``."""
+        from dnasim.compiler import check
+
+        return check(self)[0]
+
+    def compile(self):
+        """Shorthand for ``dnasim.compiler(plant)``: a new ``System`` (nothing is cached)."""
+        from dnasim.compiler import compile as compile_plant
+
+        return compile_plant(self)
+
+    def simulate(self, t_end: float | None = None, **kwargs):
+        """Shorthand for ``dnasim.simulation(compile(plant), t_end=t_end, **kwargs)``.
+
+        A plant loaded from a file carries its ``[simulation]`` table as
+        ``plant.simulation`` (a ``SimulationSettings``); its values are the defaults
+        here, and keywords override them. The plant keeps no reference to the System
+        or the Results; see ``dnasim.simulation.simulate`` for the keywords.
+        """
+        from dnasim.backends import SOLVER_OPTIONS
+        from dnasim.simulation import simulate, simulation_keywords
+
+        settings = getattr(self, "simulation", None)
+        if settings is not None:
+            given = simulation_keywords(settings)
+            if kwargs.get("solver") is not None:  # the solver object brings its own options
+                given = {k: v for k, v in given.items() if k not in SOLVER_OPTIONS}
+            kwargs = {**given, **kwargs}
+            if t_end is None:
+                t_end = settings.t_end
+        if t_end is None:
+            raise PlantError(f"plant '{self.name}': simulate() needs t_end [s]")
+        return simulate(self.compile(), t_end=t_end, **kwargs)

@@ -1,0 +1,236 @@
+"""PlantSpec, ComponentSpec, SimulationSettings: a plant as validated, picklable
+plain data (no component instances, no media), and ``build_plant(spec) -> Plant``.
+
+TOML -> ``dnasim.plantfile`` -> PlantSpec; Python -> PlantSpec directly. Both
+end in ``build_plant``, which constructs the components through the Python API
+(``Component(name, **params)``, where ``Param`` converts unit strings and checks
+ranges) and wires them in a ``Plant``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from dnasim.errors import PlantError
+
+__all__ = [
+    "LIMITS",
+    "Problems",
+    "ComponentSpec",
+    "PlantSpec",
+    "SimulationSettings",
+    "build_plant",
+    "limit_message",
+    "output_point_count",
+]
+
+#: Upper limits of counts, in one place: a plant file asking for more is refused
+#: before anything is allocated, with the value and the limit in the message.
+#: ``count`` applies to every integer parameter not listed by name.
+LIMITS: dict[str, int] = {
+    "n_volumes": 5000,  # control volumes of one pipe
+    "n_sections": 1000,  # sections of one heat exchanger
+    "n_inlets": 64,  # inlets of one mixer
+    "n_outlets": 64,  # outlets of one splitter
+    "count": 10_000,  # any other integer parameter
+    "cells": 20_000,  # volumes and sections of the whole plant together
+    "components": 2_000,  # components of one plant
+    "output_points": 10_000_000,  # rows of results.csv from output_interval
+    "max_steps": 100_000_000,  # [simulation] max_steps / --max-steps
+}
+
+
+def limit_message(what: str, value, limit) -> str:
+    """``n_volumes = 100000 is above the limit of 1000``."""
+    return f"{what} = {value:g} is above the limit of {limit:g}"
+
+
+def output_point_count(t_start: float, t_end: float, interval: float) -> float:
+    """Number of rows an output interval asks for (a float: it may be huge or inf)."""
+    ratio = (t_end - t_start) / interval
+    if not math.isfinite(ratio):
+        return math.inf
+    return math.floor(ratio + 1e-9) + 1.0
+
+
+@dataclass
+class SimulationSettings:
+    """The ``[simulation]`` table, in SI."""
+
+    t_end: float = 100.0
+    t_start: float = 0.0
+    output_interval: float | None = None
+    rtol: float = 1e-6
+    atol_scaled: float = 1e-8  # atol_i = atol_scaled * max(nominal_i, |y0_i|)
+    max_order: int = 4
+    start: str = "steady"
+    max_step: float | None = None
+    max_steps: int | None = None
+
+    def output_points(self) -> float | None:
+        """How many rows ``output_interval`` asks for (None: every accepted step)."""
+        if self.output_interval is None:
+            return None
+        return output_point_count(self.t_start, self.t_end, self.output_interval)
+
+    def check_output_points(self) -> None:
+        """Raise ``PlantError`` when ``output_interval`` asks for more rows than
+        ``LIMITS["output_points"]`` (checked before any grid is built)."""
+        n = self.output_points()
+        limit = LIMITS["output_points"]
+        if n is not None and not n <= limit:
+            raise PlantError(
+                f"[simulation] output_interval = {self.output_interval:g} s from "
+                f"{self.t_start:g} s to t_end = {self.t_end:g} s asks for {n:g} output "
+                f"points, above the limit of {limit:g}; choose a longer output_interval or "
+                "a shorter t_end"
+            )
+
+    def t_eval(self):
+        """Output times for ``output_interval`` (None: every accepted step); raises
+        ``PlantError`` above ``LIMITS["output_points"]`` rows."""
+        if self.output_interval is None:
+            return None
+        import numpy as np
+
+        self.check_output_points()
+        n = int(self.output_points()) - 1
+        t = self.t_start + self.output_interval * np.arange(n + 1)
+        if t[-1] < self.t_end - 1e-9 * max(1.0, abs(self.t_end)):
+            t = np.append(t, self.t_end)
+        return t
+
+
+@dataclass
+class ComponentSpec:
+    """One component: its name, its type (a registry name), parameters (numbers,
+    unit strings such as "120 bar", time functions, strings), ports (port -> node)
+    and inputs (signal input -> "component.output"). ``cls`` is filled from the
+    registry when not given."""
+
+    name: str
+    type: str
+    params: dict[str, Any] = field(default_factory=dict)
+    ports: dict[str, str] = field(default_factory=dict)
+    inputs: dict[str, str] = field(default_factory=dict)
+    cls: type | None = None
+    description: str = ""
+    instance: Any = None
+    fluid_ports: list[str] = field(default_factory=list)
+    signal_inputs: list[str] = field(default_factory=list)
+    signal_outputs: list[str] = field(default_factory=list)
+
+    def component_class(self) -> type:
+        """The component class: ``cls``, else the registry's entry for ``type``."""
+        if self.cls is not None:
+            return self.cls
+        from dnasim.components import REGISTRY
+
+        try:
+            return REGISTRY[self.type]
+        except KeyError:
+            raise PlantError(
+                f"component '{self.name}': unknown type '{self.type}'; known: "
+                f"{', '.join(sorted(REGISTRY))}"
+            ) from None
+
+
+@dataclass
+class PlantSpec:
+    """A plant as plain data, before any ``Plant`` is built: from a plant file
+    (``dnasim.plantfile.parse_plant``, validated there with file/table/key/line
+    locations) or from Python::
+
+        spec = PlantSpec("demo", components=[
+            ComponentSpec("src", "PressureBoundary", params={"p": "2 bar", "T": "600 K"},
+                          ports={"port": "a"}), ...], medium="Air")
+        plant = spec.build()
+
+    Parameters from Python are validated when the components are built, by the
+    same ``Param`` rules (``Param.si_value``, ``Param.range_problem``)."""
+
+    name: str
+    description: str = ""
+    simulation: SimulationSettings = field(default_factory=SimulationSettings)
+    components: list[ComponentSpec] = field(default_factory=list)
+    medium: str | None = None
+    path: str = "<python>"
+    #: modules named by the plant file's ``[plant] import`` (component plugins)
+    imports: list[str] = field(default_factory=list)
+
+    def build(self):
+        """The ``Plant`` (raises ``PlantError`` naming every problem)."""
+        return build_plant(self)
+
+
+def build_plant(spec: PlantSpec):
+    """Turn a validated spec into a ``Plant`` through the plant model's Python API."""
+    from dnasim.plant import Plant
+
+    errors = Problems(spec.path, None)
+    plant = Plant(spec.name, medium=spec.medium) if spec.medium else Plant(spec.name)
+    for c in spec.components:
+        try:
+            comp = c.instance if c.instance is not None else c.component_class()(c.name, **c.params)
+        except PlantError as exc:
+            errors.add(("components", c.name), None, str(exc))
+            continue
+        except (TypeError, ValueError) as exc:
+            errors.add(("components", c.name), None, f"{c.type} refused its parameters: {exc}")
+            continue
+        plant.add(comp)
+    errors.raise_if_any()
+    for c in spec.components:
+        for port, node in c.ports.items():
+            try:
+                plant.connect(f"{c.name}.{port}", node)
+            except PlantError as exc:
+                errors.add(("components", c.name, "ports"), port, str(exc))
+    for c in spec.components:
+        for inp, src in c.inputs.items():
+            try:
+                plant.link(src, f"{c.name}.{inp}")
+            except PlantError as exc:
+                errors.add(("components", c.name, "inputs"), inp, str(exc))
+    errors.raise_if_any()
+    try:
+        plant.simulation = spec.simulation
+    except AttributeError:  # a Plant with __slots__: settings stay in LoadedPlant
+        pass
+    return plant
+
+
+class Problems:
+    """Collects problems; each is one paragraph naming file, table, key and (with a
+    line index, see ``dnasim.plantfile``) line."""
+
+    def __init__(self, path: str, lines=None):
+        self.path = path
+        self.lines = lines
+        self.items: list[str] = []
+
+    def add(self, table: Sequence[str], key: str | None, message: str) -> None:
+        where = [self.path]
+        table = tuple(table)
+        if table:
+            where.append("[" + ".".join(_quote_key(k) for k in table) + "]")
+        if key is not None:
+            where.append(f"key '{key}'")
+        line = self.lines.find(table, key) if self.lines else None
+        if line:
+            where.append(f"line {line}")
+        self.items.append(", ".join(where) + ": " + message)
+
+    def raise_if_any(self) -> None:
+        if self.items:
+            err = PlantError("\n\n".join(self.items))
+            err.errors = list(self.items)
+            raise err
+
+
+def _quote_key(k: str) -> str:
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else '"' + k + '"'

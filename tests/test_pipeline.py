@@ -1,0 +1,203 @@
+"""The stages PlantSpec -> Plant -> compile() -> System -> simulate() -> Results."""
+
+import os
+import pickle
+import subprocess
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dnasim
+from dnasim.compiler import compile as compile_plant
+from dnasim.errors import DAEError
+from dnasim.examples import air_pipe_plant, attemperator_plant
+from dnasim.plantfile import load
+from dnasim.simulation import NordsieckBDF, simulate
+from dnasim.start import initial_values
+from dnasim.timefunctions import Step
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def stepped_air_pipe():
+    plant = air_pipe_plant(2)
+    plant.components["source"].params["T"] = Step(5.0, 600.0, 650.0)
+    return plant
+
+
+@pytest.fixture(scope="module")
+def stepped():
+    system = compile_plant(stepped_air_pipe())
+    return system, simulate(system, t_end=10.0, start="given")
+
+
+def test_results_is_a_mapping_with_strictly_increasing_time(stepped):
+    _, res = stepped
+    assert isinstance(res, Mapping)
+    assert list(res) == res.names and len(res) == len(res.names)
+    assert all(res[n].shape == res.t.shape for n in res)
+    assert np.all(np.diff(res.t) > 0)
+    # the step at t = 5 s restarts the solver: one row there, flagged
+    k = int(np.flatnonzero(res.t == 5.0)[0])
+    assert res.restart[k] and res.restart.sum() == 1
+
+
+def test_units_survive_into_dataframe_and_xarray(stepped):
+    _, res = stepped
+    df = res.to_dataframe()
+    assert df.index.is_unique and df.index.is_monotonic_increasing
+    assert df.attrs["units"]["pipe1.T_out"] == "K" and df.attrs["units"]["t"] == "s"
+    assert df.attrs["units"]["inlet.p"] == "Pa"
+    ds = res.to_xarray()
+    assert ds["pipe1.T_out"].attrs["units"] == "K" and ds["t"].attrs["units"] == "s"
+    assert ds["pipe1.T_out"].dims == ("t",)
+    np.testing.assert_array_equal(ds["pipe1.T_out"].values, res["pipe1.T_out"])
+
+
+def test_results_pickle_round_trip(stepped):
+    _, res = stepped
+    back = pickle.loads(pickle.dumps(res))
+    assert back.names == res.names and back.units == res.units
+    for n in ("pipe1.T_out", "inlet.T", "pipe1.M[0]"):
+        np.testing.assert_array_equal(back[n], res[n])
+    np.testing.assert_array_equal(back.restart, res.restart)
+    assert back.events == res.events and back.success
+
+
+def test_system_pickle_round_trip():
+    system = compile_plant(attemperator_plant())
+    y0, yp0 = initial_values(system, 0.0, "steady")
+    back = pickle.loads(pickle.dumps(system))
+    # the same residual, bit for bit, and the same switch functions
+    np.testing.assert_array_equal(back.residual(1.0, y0, yp0), system.residual(1.0, y0, yp0))
+    assert [e.name for e in back.events] == [e.name for e in system.events]
+    g = [e(1.0, y0, yp0) for e in system.events]
+    assert [e(1.0, y0, yp0) for e in back.events] == g
+    # media unpickle as the shared registry instances
+    assert back.node_media == system.node_media
+
+
+def test_spec_pickle_round_trip():
+    spec = load(ROOT / "plants" / "attemperator.toml").spec
+    back = pickle.loads(pickle.dumps(spec))
+    assert back.name == spec.name and back.simulation == spec.simulation
+    assert [c.params for c in back.components] == [c.params for c in spec.components]
+
+
+def test_system_has_no_reference_to_the_plant():
+    plant = air_pipe_plant(1)
+    system = compile_plant(plant)
+    assert all(v is not plant for v in vars(system).values())
+
+
+def test_modes_live_in_the_system_not_the_component():
+    # two Systems compiled from one plant keep their own controller modes
+    plant = attemperator_plant()
+    a, b = compile_plant(plant), compile_plant(plant)
+    res = simulate(a, t_end=400.0)
+    assert any(e["name"] == "pi.upper" for e in res.events)
+    assert a.modes["pi"]["mode"] != "free"  # saturated at the end of the run
+    assert b.modes["pi"] == {}
+    assert "mode" not in vars(plant.components["pi"])
+
+
+def test_failure_is_reported_or_raised():
+    system = compile_plant(air_pipe_plant(1))
+    res = simulate(system, t_end=10.0, start="given", solver=NordsieckBDF(max_steps=3))
+    assert not res.success and res.message
+    with pytest.raises(DAEError) as info:
+        simulate(system, t_end=10.0, start="given", solver=NordsieckBDF(max_steps=3), throw=True)
+    assert info.value.result.success is False
+
+
+def test_load_plant_simulate_uses_the_files_settings():
+    plant = dnasim.load_plant(ROOT / "plants" / "air_pipe.toml")
+    settings = plant.simulation
+    res = plant.simulate(t_end=60.0)  # only t_end overridden: start="given" from the file
+    assert res.success
+    assert res.t[-1] == 60.0
+    assert settings.start == "given"
+    # a given start keeps the cold pipe's initial outlet temperature (steady would not)
+    T0 = plant.components["pipe"].params["T0"]
+    assert res["pipe.T_out"][0] == pytest.approx(T0, rel=1e-9)
+
+
+def test_top_level_names():
+    from dnasim import Plant, PlantSpec, compile, load_plant, simulate  # noqa: F401
+
+    assert compile is compile_plant
+
+
+@pytest.mark.parametrize(
+    "args", [["components"], ["check", str(ROOT / "plants" / "air_pipe.toml")], ["--help"]]
+)
+def test_commands_on_air_do_not_import_coolprop(args):
+    # CoolProp takes seconds to import: only a medium that needs it may import it
+    code = (
+        "import sys, runpy\n"
+        f"sys.argv = ['dnasim'] + {args!r}\n"
+        "try:\n"
+        "    runpy.run_module('dnasim.cli', run_name='__main__')\n"
+        "except SystemExit as e:\n"
+        "    assert not e.code, e.code\n"
+        "sys.stderr.write('COOLPROP=%s' % ('CoolProp' in sys.modules))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        timeout=120,
+    )
+    assert "COOLPROP=False" in out.stderr, out.stderr[-2000:]
+
+
+def test_python_api_takes_unit_strings_and_the_same_checks_as_files():
+    from dnasim.components import PressureBoundary
+    from dnasim.errors import PlantError
+    from dnasim.plantfile import loads
+
+    b = PressureBoundary("src", p="120 bar", T="200 degC")
+    assert b.param_at("p", 0.0) == 120e5 and b.param_at("T", 0.0) == pytest.approx(473.15)
+    # 0 Pa is refused by the one Param check, from Python and from TOML
+    with pytest.raises(PlantError, match="pressure and must be greater than 0"):
+        PressureBoundary("src", p="0 bar", T=300.0)
+    text = (ROOT / "plants" / "air_pipe.toml").read_text().replace('p = "1.5 bar"', "p = 0", 1)
+    with pytest.raises(PlantError, match="pressure and must be greater than 0"):
+        loads(text)
+
+
+def test_plant_spec_from_python_builds_and_simulates():
+    from dnasim import ComponentSpec, PlantSpec
+
+    m = {"m_nominal": "0.1 kg/s"}
+    spec = PlantSpec(
+        "demo",
+        medium="Air",
+        components=[
+            ComponentSpec(
+                "src", "PressureBoundary", {"p": "2 bar", "T": "600 K", **m}, ports={"port": "a"}
+            ),
+            ComponentSpec(
+                "pipe",
+                "Pipe",
+                {"V": "0.1 m3", "kA": "50 W/K", "k": 1.2e5, "C_wall": "5e4 J/K", **m},
+                ports={"inlet": "a", "outlet": "b"},
+            ),
+            ComponentSpec(
+                "valve",
+                "Valve",
+                {"C": 3.2e-4, "opening": 1.0, **m},
+                ports={"inlet": "b", "outlet": "c"},
+            ),
+            ComponentSpec("sink", "PressureBoundary", {"p": "1 bar", **m}, ports={"port": "c"}),
+        ],
+    )
+    back = pickle.loads(pickle.dumps(spec))
+    assert back == spec
+    res = back.build().simulate(10.0)
+    assert res.success and res["pipe.m[1]"][-1] > 0
