@@ -363,7 +363,12 @@ class NordsieckBDF:
                     self.failure = StepFailure(f"Newton converged too slowly (rate {rate:.2f})")
                     return False, y, yp
                 self.newton_ss = rate / (1.0 - rate)
-            if self.newton_ss * dnorm <= NEWTON_TOL:
+            # With a matrix kept from earlier steps, the rate estimate is stale: never
+            # accept after the first iteration. On DAEs whose constraints amplify errors
+            # (a transistor amplifier: gain ~100 from one node to the next) a stale rate
+            # accepted leftovers far above the tolerance, and the next step could not
+            # pass the error test at any h.
+            if self.newton_ss * dnorm <= NEWTON_TOL and (m > 0 or self.jacobian_current):
                 return True, y, yp
             if m + 1 < NEWTON_MAX_ITERS:
                 f = self.residual(t, y, yp)
