@@ -48,8 +48,16 @@ def solve_with_ida(
     stats = {"steps": 0, "residual_evals": 0, "restarts": 0}
     counter = [0]
 
+    # The stop IDA is stepping to. A step that lands on it must see the residual at its
+    # left limit (a boundary that steps there must still have its old value), as
+    # dnasim's solver does; otherwise IDA meets the jump on the last step and creeps
+    # towards the tstop with ever smaller steps.
+    current_stop = [np.inf]
+
     def resfn(t, y, yp, res):
         counter[0] += 1
+        if t >= current_stop[0]:
+            t = np.nextafter(current_stop[0], -np.inf)
         res[:] = dae.residual(t, y, yp)
 
     def make(calc):
@@ -92,6 +100,7 @@ def solve_with_ida(
     success, message = True, "reached t_end"
     while t < t_end * (1 - 1e-15) - 1e-300:
         stop = next(s for s in stops if s > t + 1e-12 * max(1.0, abs(t)))
+        current_stop[0] = stop if stop < t_end else np.inf
         res = solver.step(stop, method="onestep", tstop=stop)
         if not res.success:
             success, message = False, res.message
