@@ -10,6 +10,8 @@ It validates the input, makes the initial values consistent, and steps with
   step's interpolant (``events.locate_zero``), cuts the step there, runs the
   switch's action, makes the state consistent again and restarts at order 1
   (the seed's Fig. 10.7); several switches in one step: the earliest wins;
+  a vector switch (many elements, one call per step) brackets only the elements
+  that changed sign and locates the earliest (``events.locate_earliest``);
 - emits the output points (every step, or ``t_eval``) to the result and to an
   optional ``callback`` that can stream them to disk.
 """
@@ -78,9 +80,18 @@ def solve_dae(
     jac : optional jac(t, y, yp, cj) -> dF/dy + cj dF/dy', dense or sparse.
     jac_sparsity : optional pattern of dF/dy + dF/dy'; finite differences are
         then grouped by column colouring and the LU is sparse.
-    events : switch functions g(t, y, yp) -> float, with optional attributes
-        ``direction`` (-1, 0, 1), ``terminal`` (bool), ``action(t, y, yp)``
+    events : switch functions, scalar or vector (see ``dnasim.solver.events``).
+        Scalar: g(t, y, yp) -> float, with optional attributes ``direction``
+        (-1, 0, 1), ``terminal`` (bool), ``restart`` (bool), ``action(t, y, yp)``
         returning new (y, yp) or None, and ``name``.
+        Vector: an object with an integer attribute ``size``, called once per
+        step as g(t, y, yp) -> array of shape (size,); ``direction`` a scalar or
+        an array of -1/0/+1, ``names`` (size strings), ``terminal``, ``restart``
+        and optional ``action(t, y, yp, which)``, ``which`` the int array of the
+        elements that crossed at the located time. A switch with an action, or
+        terminal, or with ``restart = True`` cuts the step at its earliest
+        crossing, is made consistent there and restarts at order 1; otherwise its
+        crossings are only located and logged. The event log names the element.
     tstops : known discontinuity times, hit exactly; restart at order 1.
     t_eval : output times (default: every accepted step).
     calc_initial : make (y0, yp0) consistent first (keep the differential y0).
