@@ -378,6 +378,7 @@ class Plant:
                     jac_sparsity=dae.jac_sparsity,
                     calc_initial=False,
                     variable_names=dae.names,
+                    equation_names=dae.eq_names,
                     exclude_algebraic_from_error=exclude_algebraic_from_error,
                     **kwargs,
                 )

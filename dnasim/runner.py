@@ -184,6 +184,7 @@ def solve_streaming(plant, sim, callback, *, dense_output: bool = False):
         jac_sparsity=dae.jac_sparsity,
         calc_initial=False,
         variable_names=dae.names,
+        equation_names=dae.eq_names,
         rtol=sim.rtol,
         atol=dae.atol_vector(sim.atol, y0),
         max_order=sim.max_order,

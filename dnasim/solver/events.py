@@ -124,7 +124,7 @@ class SwitchFunction:
                 f"Switch function {self.name!r} returned {v!r}; it must return "
                 + (f"{self.size} numbers." if self.vector else "one number.")
             ) from None
-        if v.size != self.size or (self.vector and v.shape != (self.size,)):
+        if v.size != self.size or (self.vector and v.ndim > 1):
             raise DAEError(
                 f"Switch function {self.name!r} returned shape {v.shape}; it must return "
                 + (f"shape ({self.size},)." if self.vector else "one number.")

@@ -19,9 +19,13 @@ Newton. The Jacobian dF/du takes the columns of dF/dy for the y unknowns and of
 dF/dy' for the y' unknowns; it is built by finite differences grouped by the
 column colouring of ``linear_algebra.IterationMatrix`` and factorised by LU. It
 is refreshed at every iteration. The Newton step d = -J^{-1} F is globalised by
-backtracking on the natural-level function phi(u) = || J^{-1} F(u) ||_uw (the
-scaled Newton step, IDA's line search): u + lam d is accepted when
-phi <= (1 - 1e-4 lam) phi(u), halving lam down to 1e-5.
+backtracking on the row-scaled residual psi(u) = || F(u) / r ||_2, with
+r_i = max_j |J_ij| / uw_j taken from the first iteration's Jacobian (each residual
+in tolerance units of the unknowns it sets): u + lam d is accepted when
+psi <= (1 - 1e-4 lam) psi(u), halving lam down to 1e-5. (IDA backtracks on the
+natural-level function ||J^{-1} F||; from a plant's rough steady-start guess that
+test stalled, or led the iterates into a region where a controller saturates and
+the Jacobian is singular, where psi converged: superheater_line.toml.)
 
 Convergence when, at the current iterate,
 
@@ -31,7 +35,7 @@ Convergence when, at the current iterate,
   |d_j| uw_j > 0.0033, i.e. no representable progress is left, or
 - F is exactly zero.
 
-A line search that cannot reduce phi at a point already within the
+A line search that cannot reduce psi at a point already within the
 integrator's tolerance (||d||_uw <= 1) is accepted too: the leftover is
 round-off, and the BDF corrector absorbs it.
 """
@@ -127,6 +131,7 @@ def solve_consistent(
         )
     problem = ""
     scaled = None
+    rows = None  # row scales of psi, fixed at the first iteration
     uw = np.ones_like(y)
     try:
         for _ in range(max_iters):
@@ -157,13 +162,16 @@ def solve_consistent(
                 break
             if phi <= TOLERANCE or _at_roundoff(d, dw, u):
                 return _update(y, yp, d, 1.0, ymask, ypmask)
+            # Backtracking on the row-scaled residual psi (see the module doc).
+            if rows is None:
+                rows = _row_scales(jac, uw)
+            psi = float(np.linalg.norm(f / rows))
             lam = 1.0
             while True:
                 y_new, yp_new = _update(y, yp, d, lam, ymask, ypmask)
                 f_new = _evaluate(residual, t, y_new, yp_new)
                 if f_new is not None:
-                    phi_new = _norm(matrix.solve(-f_new) * uw)
-                    if phi_new <= (1.0 - ARMIJO * lam) * phi:
+                    if float(np.linalg.norm(f_new / rows)) <= (1.0 - ARMIJO * lam) * psi:
                         break
                 lam *= 0.5
                 if lam < LAMBDA_MIN:
@@ -200,6 +208,16 @@ def _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix):
     return jac
 
 
+def _row_scales(jac, uw) -> np.ndarray:
+    """r_i = max_j |J_ij| / uw_j: F_i / r_i is residual i in tolerance units of the
+    unknown it sets most (1 for an empty row)."""
+    if hasattr(jac, "multiply"):
+        r = np.asarray(abs(jac).multiply(1.0 / uw[None, :]).max(axis=1).todense()).ravel()
+    else:
+        r = np.max(np.abs(jac) / uw[None, :], axis=1) if jac.size else np.zeros(0)
+    return np.where(np.isfinite(r) & (r > 0), r, 1.0)
+
+
 def _update(y, yp, d, lam, ymask, ypmask):
     return y + lam * d * ymask, yp + lam * d * ypmask
 
@@ -212,12 +230,7 @@ def _at_roundoff(d, dw, u) -> bool:
 
 def _scaled_residuals(jac, f, uw) -> np.ndarray:
     """|F_i| / max_j |J_ij| / uw_j: each residual in tolerance units of the unknowns it sets."""
-    if hasattr(jac, "multiply"):
-        row = np.asarray(abs(jac).multiply(1.0 / uw[None, :]).max(axis=1).todense()).ravel()
-    else:
-        row = np.max(np.abs(jac) / uw[None, :], axis=1) if jac.size else np.zeros(0)
-    row[row == 0.0] = np.inf
-    return np.abs(f) / row
+    return np.abs(f) / _row_scales(jac, uw)
 
 
 def _worst(f, scaled, uw, matrix, equation_names, variable_names, count=4) -> str:
