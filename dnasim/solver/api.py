@@ -59,6 +59,8 @@ def solve_dae(
     equation_names: Sequence[str] | None = None,
     dense_output: bool = True,
     max_steps: int = 500_000,
+    output_interval: float | None = None,
+    keep_output: bool = True,
 ) -> DAEResult:
     """Solve the index-1 DAE F(t, y, y') = 0 from t_span[0] to t_span[1].
 
@@ -93,7 +95,11 @@ def solve_dae(
         crossing, is made consistent there and restarts at order 1; otherwise its
         crossings are only located and logged. The event log names the element.
     tstops : known discontinuity times, hit exactly; restart at order 1.
-    t_eval : output times (default: every accepted step).
+    t_eval : output times (default: every accepted step). With output times, both
+        sides of every restart (tstop, located switch) are output points too: two
+        points at the same t, the state before and after the discontinuity.
+    output_interval : output times t0, t0 + dt, ..., t_end generated as the
+        integration reaches them (no grid is allocated); not with ``t_eval``.
     calc_initial : make (y0, yp0) consistent first (keep the differential y0).
     exclude_algebraic_from_error : leave algebraic components out of the error test.
     callback : callback(t, y, yp) for every output point, in order (streaming).
@@ -101,6 +107,8 @@ def solve_dae(
     equation_names : names of the equations F_i ("water.mass"), used in error messages.
     dense_output : keep the Nordsieck polynomials for ``result.sol(t)``.
     max_steps : give up after this many steps.
+    keep_output : False: output points go to ``callback`` only and are not kept
+        in the result (``result.t`` is then empty): memory does not grow with them.
 
     Returns
     -------
@@ -130,7 +138,19 @@ def solve_dae(
     matrix = IterationMatrix(F, problem.n, jac, problem.sparsity, variable_names, equation_names)
     t0, t_end = problem.t0, problem.t_end
     y, yp = problem.y0, problem.yp0
-    out = _Output(problem.t_eval, callback, dense_output, t0)
+    grid = None
+    if problem.t_eval is not None and output_interval is not None:
+        raise DAEError("give t_eval or output_interval, not both.")
+    if problem.t_eval is not None:
+        grid = _Grid(t_eval=problem.t_eval)
+    elif output_interval is not None:
+        dt = output_interval
+        if isinstance(dt, bool) or not (
+            isinstance(dt, (int, float, np.integer, np.floating)) and np.isfinite(dt) and dt > 0
+        ):
+            raise DAEError(f"output_interval must be a positive number; got {dt!r}.")
+        grid = _Grid(interval=float(dt), t0=t0, t_end=t_end)
+    out = _Output(grid, callback, dense_output, t0, keep=keep_output)
     switches = [SwitchFunction.wrap(g, i) for i, g in enumerate(events)]
     event_log: list[dict] = []
     t_events: list[list] = [[] for _ in switches]
@@ -376,33 +396,75 @@ def _run_action(sw, c: _Crossing, n: int):
     return y_new, yp_new
 
 
-class _Output:
-    """Collects output points (and dense-output pieces) and forwards them to the callback."""
+class _Grid:
+    """Output times, consumed in order: an array (``t_eval``) or the lazy grid
+    t0 + k dt, k = 0, 1, ..., closed by t_end (``output_interval``): nothing of
+    the size of the grid is allocated."""
 
-    def __init__(self, t_eval, callback, dense_output, t0):
-        self.t_eval = t_eval
-        self.next_eval = 0
+    def __init__(self, t_eval=None, interval=None, t0=0.0, t_end=0.0):
+        self.array = t_eval
+        self.interval = interval
+        self.t0, self.t_end = t0, t_end
+        self.k = 0
+        self.done = False
+
+    def peek(self) -> float | None:
+        if self.array is not None:
+            return float(self.array[self.k]) if self.k < len(self.array) else None
+        if self.done:
+            return None
+        t = self.t0 + self.k * self.interval
+        if t >= self.t_end - 1e-9 * (self.t_end - self.t0):
+            return self.t_end
+        return t
+
+    def advance(self) -> None:
+        if self.array is None and self.peek() == self.t_end:
+            self.done = True
+        self.k += 1
+
+
+class _Output:
+    """Collects output points (and dense-output pieces) and forwards them to the callback.
+
+    Without output times every accepted step is an output point, and after a
+    restart (tstop or located switch) the state right after it is a second point
+    at the same t. With output times (``t_eval`` or ``output_interval``) both
+    sides of every restart are output points as well (two points at the same t), so
+    that integrals over the output are exact across the discontinuity.
+    ``keep=False``: points go to the callback only and nothing grows with them.
+    """
+
+    def __init__(self, grid, callback, dense_output, t0, keep=True):
+        self.grid = grid
         self.callback = callback
         self.dense = dense_output
+        self.keep = keep
         self.t, self.y, self.yp = [], [], []
         self.history = []
         self.pieces = []
         self.t0 = t0
+        self.last_t = None
+        self.left = None  # (t, y, yp) at the end of the last step, for a restart there
 
     def _emit(self, t, y, yp):
-        self.t.append(t)
-        self.y.append(np.array(y))
-        self.yp.append(np.array(yp))
+        if self.keep:
+            self.t.append(t)
+            self.y.append(np.array(y))
+            self.yp.append(np.array(yp))
+        self.last_t = t
         if self.callback is not None:
             call_user(self.callback, "the output callback", t, t, y, yp)
 
     def initial(self, t, y, yp):
-        if self.t_eval is None:
+        if self.grid is None:
             self._emit(t, y, yp)
-        else:
-            while self.next_eval < len(self.t_eval) and self.t_eval[self.next_eval] <= t:
-                self._emit(self.t_eval[self.next_eval], y, yp)
-                self.next_eval += 1
+            return
+        te = self.grid.peek()
+        while te is not None and te <= t:
+            self._emit(te, y, yp)
+            self.grid.advance()
+            te = self.grid.peek()
 
     def step(self, solver, t_prev, t_until):
         """Output of the step just taken, on (t_prev, t_until] (t_until <= solver.t)."""
@@ -410,24 +472,28 @@ class _Output:
         if self.dense:
             t_ref, h, q, z = solver.nordsieck_snapshot()
             self.pieces.append((t_until, t_ref, h, q, z))
-        if self.t_eval is None:
-            if t_until == solver.t:
-                self._emit(t_until, solver.y, solver.yp)
-            else:
-                self._emit(t_until, *solver.interpolate(t_until))
+        if t_until == solver.t:
+            self.left = (t_until, solver.y, solver.yp)
+        else:
+            self.left = (t_until, *solver.interpolate(t_until))
+        if self.grid is None:
+            self._emit(*self.left)
             return
-        while self.next_eval < len(self.t_eval) and self.t_eval[self.next_eval] <= t_until:
-            te = self.t_eval[self.next_eval]
-            if te == solver.t:
-                self._emit(te, solver.y, solver.yp)
+        te = self.grid.peek()
+        while te is not None and te <= t_until:
+            if te == t_until:
+                self._emit(*self.left)
             else:
                 self._emit(te, *solver.interpolate(te))
-            self.next_eval += 1
+            self.grid.advance()
+            te = self.grid.peek()
 
     def restart(self, t, y, yp):
-        """After a discontinuity: the state right after it (an extra point at the same t)."""
-        if self.t_eval is None:
-            self._emit(t, y, yp)
+        """After a discontinuity at t: the state right after it, an extra point at the
+        same t (with output times, preceded by the state right before it)."""
+        if self.grid is not None and self.last_t != t and self.left is not None:
+            self._emit(*self.left)
+        self._emit(t, y, yp)
 
     def arrays(self, n):
         if not self.t:
