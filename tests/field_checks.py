@@ -369,7 +369,8 @@ def check_steam_network(run: Run) -> Checks:
         m = final(df, f"valve_{br}1.m")
         dp = (m / P[f"valve_{br}1"].params["C"]) ** 2 + (m / P[f"valve_{br}2"].params["C"]) ** 2
         p, h = pipe_states(df, f"pipe_{br}", f"n_{br}3", -1)
-        up = [(final(df, f"n_{br}2.p"), final(df, f"n_{br}2.h"))] + list(zip(p[:-1], h[:-1]))
+        up = [(final(df, f"n_{br}2.p"), final(df, f"n_{br}2.h"))]
+        up += list(zip(p[:-1], h[:-1], strict=True))
         k_i = P[f"pipe_{br}"].params["k"] / len(p)
         dp += sum(k_i * m * m / PropsSI("D", "P", pu, "H", hu, WATER) for pu, hu in up)
         dps.append(dp)
@@ -564,7 +565,7 @@ def check_supercritical(run: Run) -> Checks:
 
 
 def check_800C(run: Run) -> Checks:
-    df, c = run.df, Checks()
+    c = Checks()
     _heated_pipe_steady(run, c)
     T800 = 800 + 273.15
     n = _crossed(run, lambda p, h: T_ph(p, h) < T800 - 2, lambda p, h: T_ph(p, h) > T800 + 2)
@@ -573,9 +574,7 @@ def check_800C(run: Run) -> Checks:
 
 
 def check_spray(run: Run) -> Checks:
-    df, c = run.df, Checks()
-    c += check_max_principle(run, 200 + 273.15, 540 + 273.15)
-    return c
+    return check_max_principle(run, 200 + 273.15, 540 + 273.15)
 
 
 def spray_stop_is_explained(run: Run) -> bool:

@@ -9,7 +9,6 @@ them alone, ``-m "not field_slow"`` skips them; CI runs everything.
 """
 
 import pytest
-
 from field_checks import CASES, evaluate, run_plant
 
 
