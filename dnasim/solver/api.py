@@ -24,7 +24,7 @@ from dnasim.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
 from dnasim.solver.bdf import CountedResidual, NordsieckBDF, SolverStats
 from dnasim.solver.events import SwitchFunction, locate_zero
-from dnasim.solver.initial import detect_algebraic, make_consistent
+from dnasim.solver.initial import detect_algebraic, solve_consistent
 from dnasim.solver.linear_algebra import IterationMatrix
 from dnasim.solver.result import DAEResult, NordsieckSolution
 
@@ -52,6 +52,7 @@ def solve_dae(
     exclude_algebraic_from_error: bool = False,
     callback: Callable | None = None,
     variable_names: Sequence[str] | None = None,
+    equation_names: Sequence[str] | None = None,
     dense_output: bool = True,
     max_steps: int = 500_000,
 ) -> DAEResult:
@@ -83,7 +84,8 @@ def solve_dae(
     calc_initial : make (y0, yp0) consistent first (keep the differential y0).
     exclude_algebraic_from_error : leave algebraic components out of the error test.
     callback : callback(t, y, yp) for every output point, in order (streaming).
-    variable_names : names of the components, used in error messages.
+    variable_names : names of the unknowns y_i ("water.flow"), used in error messages.
+    equation_names : names of the equations F_i ("water.mass"), used in error messages.
     dense_output : keep the Nordsieck polynomials for ``result.sol(t)``.
     max_steps : give up after this many steps.
 
@@ -108,10 +110,13 @@ def solve_dae(
         tstops,
         t_eval,
         variable_names,
+        equation_names,
     )
     stats = SolverStats()
     F = CountedResidual(residual, problem.n, stats)
-    matrix = IterationMatrix(F, problem.n, jac, problem.sparsity, variable_names)
+    matrix = IterationMatrix(
+        F, problem.n, jac, problem.sparsity, variable_names, equation_names
+    )
     t0, t_end = problem.t0, problem.t_end
     y, yp = problem.y0, problem.yp0
     try:
@@ -126,13 +131,27 @@ def solve_dae(
         error_mask[algebraic_mask] = 0.0
     span = t_end - t0
     ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
-    weights = 1.0 / (rtol * np.abs(y) + problem.atol)
 
-    def consistent(t, y, yp):
-        return make_consistent(F, t, y, yp, algebraic_mask, weights, ic_scale, matrix)
+    def consistent(t, y, yp, what):
+        yp = np.array(yp, dtype=float)
+        yp[algebraic_mask] = 0.0  # not determined by F; the predictor starts them flat
+        return solve_consistent(
+            F,
+            t,
+            y,
+            yp,
+            algebraic_mask,
+            rtol=rtol,
+            atol=problem.atol,
+            h_scale=ic_scale,
+            matrix=matrix,
+            variable_names=variable_names,
+            equation_names=equation_names,
+            what=what,
+        )
 
     if calc_initial:
-        y, yp = consistent(t0, y, yp)
+        y, yp = consistent(t0, y, yp, "the initial values")
     solver = NordsieckBDF(
         F,
         t0,
@@ -148,6 +167,7 @@ def solve_dae(
         stats=stats,
         t_scale=span,
         names=variable_names,
+        equation_names=equation_names,
     )
     out = _Output(problem.t_eval, callback, dense_output, t0)
     out.initial(t0, y, yp)
@@ -223,7 +243,9 @@ def solve_dae(
                     changed = sw.action(t_star, y_star.copy(), yp_star.copy())
                     if changed is not None:
                         y_new, yp_new = (np.asarray(v, dtype=float) for v in changed)
-                y_new, yp_new = consistent(t_star, y_new, yp_new)
+                y_new, yp_new = consistent(
+                    t_star, y_new, yp_new, f"the values after the switch {sw.name!r}"
+                )
                 solver.restart(t_star, y_new, yp_new)
                 out.restart(t_star, y_new, yp_new)
                 g_old = [sw.value(t_star, y_new, yp_new) for sw in switches]
@@ -232,7 +254,9 @@ def solve_dae(
             g_old = g_new
             if stops and solver.t == stops[0]:
                 stops.pop(0)
-                y_new, yp_new = consistent(solver.t, solver.y, solver.yp)
+                y_new, yp_new = consistent(
+                    solver.t, solver.y, solver.yp, "the values after the time event (tstop)"
+                )
                 solver.restart(solver.t, y_new, yp_new)
                 out.restart(solver.t, y_new, yp_new)
                 g_old = [sw.value(solver.t, y_new, yp_new) for sw in switches]
@@ -363,6 +387,7 @@ class _Problem:
         tstops,
         t_eval,
         names,
+        equation_names=None,
     ):
         p = cls()
         if not callable(residual):
@@ -427,6 +452,8 @@ class _Problem:
             p.t_eval = te
         if names is not None and len(names) != n:
             raise DAEError(f"variable_names has {len(names)} names for {n} unknowns.")
+        if equation_names is not None and len(equation_names) != n:
+            raise DAEError(f"equation_names has {len(equation_names)} names for {n} equations.")
         for i, g in enumerate(events):
             SwitchFunction.wrap(g, i)
         return p

@@ -122,6 +122,7 @@ class NordsieckBDF:
         stats: SolverStats,
         t_scale: float,
         names=None,
+        equation_names=None,
         fixed_order: bool = False,
         fixed_step: bool = False,
     ):
@@ -136,6 +137,7 @@ class NordsieckBDF:
         self.stats = stats
         self.t_scale = t_scale
         self.names = names
+        self.equation_names = equation_names
         self.fixed_order = fixed_order
         self.fixed_step = fixed_step
         self.z = np.zeros((nd.MAX_ORDER + 2, self.n))
@@ -151,6 +153,9 @@ class NordsieckBDF:
         ypnorm = self.norm(yp, self.weights_for(y))
         if ypnorm * h > 0.5:
             h = 0.5 / ypnorm
+        # Not below a few hundred ulp of t: a restart at a large t with a fast-growing
+        # accumulator would otherwise start below the round-off limit of the step size.
+        h = max(h, min(1.0e3 * EPS * abs(self.t), 1.0e-3 * self.t_scale))
         return min(h, self.max_step)
 
     def restart(self, t, y, yp, h0=None) -> None:
@@ -353,7 +358,10 @@ class NordsieckBDF:
         bad = np.flatnonzero(~np.isfinite(f)).tolist()
         self.failure = StepFailure(
             f"the residual returned NaN or inf at t = {t:.10g} in equation(s) "
-            + ", ".join(str(i) for i in bad[:8]),
+            + ", ".join(
+                str(self.equation_names[i]) if self.equation_names is not None else str(i)
+                for i in bad[:8]
+            ),
             bad,
         )
 
