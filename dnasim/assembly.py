@@ -2,21 +2,50 @@
 
 Global vector y:
   * for each node (in connection order): p [Pa], h [J/kg] (names "node.p", "node.h");
+    h is the mixed specific enthalpy of the fluid flowing INTO the node;
   * for each component (in the order added): its variables ("comp.var",
     vector elements "comp.var[i]").
 Signal inputs are not variables: they alias the linked output variable.
 
 Global equations F:
   * each component's equations, in the order it declares them (rows "comp.eq");
-  * one mass balance per node (rows "node.mass"):
-        sum of flows of outlet ports at the node - sum of flows of inlet ports = 0
-    (flows are positive in the design direction). The node enthalpy is fixed by the
-    one component whose outlet port is at the node.
+  * per node, the mass balance (rows "node.mass")
+
+        sum_k n_k = 0                                            [kg/s]
+
+    and the mixing equation (rows "node.mixing")
+
+        sum_k w_k(n_k) (h_out_k - h_node) = 0                    [W]
+
+    where n_k is the flow from component k INTO the node through port k (the
+    port's flow variable, signed by its role: +1 for an outlet, -1 for an inlet),
+    h_out_k the enthalpy component k delivers when fluid leaves it through that
+    port (``FluidPort.h_out``), and w_k(m) = (m + sqrt(m^2 + eps_k^2))/2 the smooth
+    upwind weight with the port's flow scale eps_k = ``FluidPort.m_eps``
+    (``physics.upwind_weight``: w(m) - w(-m) = m, w(0) = eps/2 > 0). Probes carry
+    no flow and take no part. So h_node is the flow-weighted mean of the
+    enthalpies flowing in; at zero flow it is the eps-weighted mean, and the
+    Jacobian stays regular.
+
+Energy conservation across a node is exact. Every component computes the energy
+flow into itself at port k with ``physics.energy_in``:
+
+    E_k = w_k(m_k) h_node - w_k(-m_k) h_out_k,    m_k = -n_k (flow into component k).
+
+Summing over the ports of a node and using the mixing equation
+(sum_k w_k(-m_k) h_out_k = h_node sum_k w_k(-m_k)) and the mass balance
+(sum_k m_k = 0):
+
+    sum_k E_k = h_node sum_k (w_k(m_k) - w_k(-m_k)) = h_node sum_k m_k = 0,
+
+so the energy leaving one component through a node equals the energy entering
+the others, to round-off, in forward, reverse and zero flow. The design
+direction of a port is only the sign convention of its flow variable.
 
 Sparsity: from the components' ``Equation`` declarations (``y`` and ``yp``
-lists); ``pattern_y`` (dF/dy), ``pattern_yp`` (dF/dy') and their union
-``jac_sparsity``. A variable is differential when some equation declares its
-derivative; the others are algebraic.
+lists) and the node equations; ``pattern_y`` (dF/dy), ``pattern_yp`` (dF/dy')
+and their union ``jac_sparsity``. A variable is differential when some
+equation declares its derivative; the others are algebraic.
 
 Tolerances: ``atol_vector(atol, y0)`` gives atol_i = atol * scale_i with
 scale_i = max(declared nominal_i, |y0_i|): a relative tolerance on each
@@ -30,6 +59,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from dnasim.components.base import LocalVector
+from dnasim.components.physics import upwind_weight
 from dnasim.errors import PlantError, ResidualDomainError
 
 NODE_P_NOMINAL = 1e5  # Pa
@@ -51,7 +81,13 @@ class ComponentBlock:
 
 
 class PlantEvent:
-    """A component switch function seen by the solver: g(t, y, yp) on global vectors."""
+    """A component switch function seen by the solver: g(t, y, yp) on global vectors.
+
+    Attributes for the solver: ``name``, ``direction`` (scalar or array of
+    ``size``), ``terminal``, ``restart`` (restart at order 1 without an action),
+    ``size`` (1: g returns a float; n: an array of n values), ``names`` (one per
+    entry, e.g. "evap.h_v[19] saturated liquid"), ``action``. ``variables``: the
+    global indices of the variables the switch reads (its block's variables)."""
 
     def __init__(self, block: ComponentBlock, switch):
         self.block = block
@@ -59,13 +95,30 @@ class PlantEvent:
         self.component = block.comp.name
         self.name = f"{block.comp.name}.{switch.name}"
         self.direction = switch.direction
-        self.terminal = False
+        self.terminal = bool(getattr(switch, "terminal", False))
+        self.restart = bool(getattr(switch, "restart", False))
+        self.size = int(getattr(switch, "size", 1) or 1)
+        names = getattr(switch, "names", None)
+        if self.size == 1:
+            self.names = [self.name]
+        else:
+            names = names or [f"{switch.name}[{i}]" for i in range(self.size)]
+            self.names = [f"{block.comp.name}.{nm}" for nm in names]
+        self.variables = np.asarray(block.gidx, dtype=np.intp)
 
     def __call__(self, t, y, yp):
         b = self.block
-        return float(self.switch.function(t, b.local(y), b.local(yp)))
+        v = self.switch.function(t, b.local(y), b.local(yp))
+        if self.size == 1:
+            return float(np.asarray(v, dtype=float).reshape(-1)[0])
+        return np.asarray(v, dtype=float).reshape(self.size)
 
-    def action(self, t, y, yp):
+    def message(self, t):
+        """The plain reason of a terminal switch (None when it has none)."""
+        f = getattr(self.switch, "message", None)
+        return f(t) if f is not None else None
+
+    def action(self, t, y, yp, which=None):
         """Run the component's action; if it changed its variables (e.g. a
         controller resetting its integral), return the new (y, yp)."""
         if self.switch.action is None:
@@ -176,10 +229,12 @@ class AssembledDAE:
                 )
             )
 
-        # node mass balances
+        # node mass balances and mixing equations
         self.node_eq_start = len(eq_names)
-        node_rows, node_cols, node_vals = [], [], []
-        for j, node in enumerate(plant.node_names()):
+        node_names = plant.node_names()
+        n_nodes = len(node_names)
+        entries = []  # (node number, flow index, sign, h_out index, eps)
+        for j, node in enumerate(node_names):
             eq_names.append(f"{node}.mass")
             eq_owner.append(node)
             cols = []
@@ -188,15 +243,42 @@ class AssembledDAE:
                     continue
                 b = self.block(comp_name)
                 g = b.gidx[b.index[port.flow]]
-                node_rows.append(j)
-                node_cols.append(g)
-                node_vals.append(1.0 if port.role == "outlet" else -1.0)
+                try:
+                    gh = b.gidx[b.index[port.h_out]]
+                except KeyError:
+                    raise PlantError(
+                        f"component '{comp_name}' ({type(b.comp).__name__}): port '{port.name}' "
+                        f"delivers h_out = {port.h_out!r}, which is not one of its variables or "
+                        "port values"
+                    ) from None
+                sign = 1.0 if port.role == "outlet" else -1.0
+                entries.append((j, g, sign, gh, float(port.m_eps)))
                 cols.append(g)
             rows_y.append(cols)
             rows_yp.append([])
+        for j, node in enumerate(node_names):
+            eq_names.append(f"{node}.mixing")
+            eq_owner.append(node)
+            k = self.node_index[node]
+            cols = [k + 1]
+            for jj, g, _, gh, _ in entries:
+                if jj == j:
+                    cols += [g, gh]
+            rows_y.append(cols)
+            rows_yp.append([])
         n = len(names)
-        n_nodes = len(plant.node_names())
-        self.node_matrix = sp.csr_matrix((node_vals, (node_rows, node_cols)), shape=(n_nodes, n))
+        e = np.array(entries, dtype=float).reshape(-1, 5)
+        self._mix_node = e[:, 0].astype(np.intp)
+        self._mix_flow = e[:, 1].astype(np.intp)
+        self._mix_sign = e[:, 2]
+        self._mix_hout = e[:, 3].astype(np.intp)
+        self._mix_eps = e[:, 4]
+        self._node_h = np.array([self.node_index[nd] + 1 for nd in node_names], dtype=np.intp)
+        self._mix_hnode = self._node_h[self._mix_node]
+        self.n_nodes = n_nodes
+        self.node_matrix = sp.csr_matrix(
+            (self._mix_sign, (self._mix_node, self._mix_flow)), shape=(n_nodes, n)
+        )
 
         self.n = n
         self.n_equations = len(eq_names)
@@ -251,7 +333,8 @@ class AssembledDAE:
                         f"but declares {ne} equations"
                     )
             F[b.eq_slice] = r
-        F[self.node_eq_start :] = self.node_matrix @ y
+        F[self.node_eq_start : self.node_eq_start + self.n_nodes] = self.node_matrix @ y
+        F[self.node_eq_start + self.n_nodes :] = self.node_mixing(y)
         self._checked_lengths = True
         if not np.all(np.isfinite(F)):
             bad = np.flatnonzero(~np.isfinite(F))[:3]
@@ -261,6 +344,13 @@ class AssembledDAE:
                 + f" at t = {t:g}"
             )
         return F
+
+    def node_mixing(self, y) -> np.ndarray:
+        """Residuals of the nodes' mixing equations [W] (see the module docstring)."""
+        inflow = self._mix_sign * y[self._mix_flow]
+        w = upwind_weight(inflow, self._mix_eps)
+        terms = w * (y[self._mix_hout] - y[self._mix_hnode])
+        return np.bincount(self._mix_node, weights=terms, minlength=self.n_nodes)
 
     def atol_vector(self, atol: float, y0) -> np.ndarray:
         """atol_i = atol * max(nominal_i, |y0_i|)."""

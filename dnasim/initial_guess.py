@@ -1,10 +1,11 @@
 """The starting point for initialisation, from the components' own guesses.
 
 1. Node guesses: each component may guess (p, h) at its ports
-   (``Component.guess_nodes``). A fixed-pressure port wins for p, the outlet port
-   that sets the node's enthalpy wins for h.
+   (``Component.guess_nodes``). A fixed-pressure port wins for p, a port that
+   supplies its own enthalpy (``FluidPort.h_source``) wins for h.
 2. Missing node guesses are propagated along components, inlet to outlet and
-   back, then default to p = 1e5 Pa and h = h(1e5 Pa, 293.15 K) of the node's fluid.
+   back (enthalpy along the design direction), then default to p = 1e5 Pa and
+   h = h(1e5 Pa, 293.15 K) of the node's fluid.
 3. Components fill their own variables (``Component.initial_guess``) in flow
    order (sources first), so a component sees its upstream neighbours' guesses.
 """
@@ -60,7 +61,7 @@ def initial_guess(plant, dae, t0: float) -> np.ndarray:
             node = plant.connections[(name, pname)]
             port = comp.port(pname)
             rp = 2 if port.pressure == "fixed" else 1
-            rh = 2 if port.role == "outlet" else 1
+            rh = 2 if port.h_source and port.role != "probe" else 1
             if p is not None and rp > p_rank.get(node, 0):
                 p_guess[node], p_rank[node] = p, rp
             if h is not None and rh > h_rank.get(node, 0):

@@ -4,9 +4,11 @@ Checks, in order (later ones need the earlier ones to pass):
 
 1. names: duplicate component names, a node named like a component;
 2. wiring: dangling fluid ports and signal inputs, nodes with one port only,
-   nodes whose enthalpy is fixed by no outlet or by several outlets;
-3. counting: per component, equations = own variables + outlet ports (each
-   outlet fixes its node's enthalpy); for the plant, equations = unknowns;
+   groups of nodes (joined by valves and junctions, which pass enthalpy on)
+   into which no port supplies an enthalpy of its own (no storage volume, no
+   boundary with h or T);
+3. counting: per component, equations = own variables (each node brings its p
+   and h and its mass and mixing equations); for the plant, equations = unknowns;
 4. structural regularity: a maximum matching between equations and variables
    (Hopcroft-Karp, ``scipy.sparse.csgraph.maximum_bipartite_matching``; a variable
    and its derivative count as one);
@@ -15,7 +17,9 @@ Checks, in order (later ones need the earlier ones to pass):
    differential variables, y_j of the algebraic ones}. If it is not perfect the
    DAE has index > 1. The common cause, two storage volumes (or a storage volume
    and a fixed pressure) joined with no flow resistance between them, is named in
-   plain words from the ports' pressure roles;
+   plain words from the ports' pressure roles, with the parameter whose zero value
+   removed the resistance (a Pipe's k = 0, a HeatExchanger side without friction),
+   and from the components' own ``structure_problems()``;
 6. connectivity: disconnected sub-networks are reported as a warning.
 """
 
@@ -86,19 +90,48 @@ def _check_wiring(plant, report):
                 f"node '{node}' connects only {labels}: a fluid port must meet at least one other "
                 "port"
             )
+    _check_enthalpy_sources(plant, report)
+
+
+def _check_enthalpy_sources(plant, report):
+    """Every group of nodes joined by pass-through components needs a port that
+    supplies an enthalpy of its own (``FluidPort.h_source``)."""
+    parent = {n: n for n in plant.node_names()}
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for name, comp in plant.components.items():
+        passing = [
+            plant.connections[(name, p.name)]
+            for p in comp.fluid_ports()
+            if p.role != "probe" and not p.h_source and (name, p.name) in plant.connections
+        ]
+        for a, b in zip(passing, passing[1:], strict=False):
+            parent[find(a)] = find(b)
+    has_source = defaultdict(bool)
+    members = defaultdict(list)
+    for node in plant.node_names():
+        members[find(node)].append(node)
+    for (cname, pname), node in plant.connections.items():
+        port = plant.components[cname].port(pname)
+        if port.role != "probe" and port.h_source:
+            has_source[find(node)] = True
+    for root, nodes in members.items():
+        if has_source[root]:
             continue
-        outlets = [f"{c}.{p.name}" for c, p in ports if p.role == "outlet"]
-        if not outlets:
-            report.errors.append(
-                f"node '{node}' ({labels}): no outlet port feeds it, so nothing sets its enthalpy; "
-                f"a sink boundary takes only p (or m), a source needs h or T"
-            )
-        elif len(outlets) > 1:
-            report.errors.append(
-                f"node '{node}' is fed by several outlets ({', '.join(outlets)}): join streams "
-                "with a Mixer "
-                f"(a sink boundary must not be given h or T)"
-            )
+        labels = ", ".join(
+            f"{c}.{p.name}" for n in nodes for c, p in plant.ports_at(n) if p.role != "probe"
+        )
+        which = " and ".join(f"node '{n}'" for n in nodes)
+        report.errors.append(
+            f"{which} ({labels}): no port supplies an "
+            "enthalpy there (no storage volume, no boundary with h or T), so nothing sets the "
+            "enthalpy; give a boundary h or T (a sink boundary may take only p or m)"
+        )
 
 
 def _check_counts(plant, dae, report):
@@ -106,14 +139,11 @@ def _check_counts(plant, dae, report):
         comp = b.comp
         n_eq = b.eq_slice.stop - b.eq_slice.start
         n_own = sum(1 for g in b.gidx if g >= dae.n_node_vars and dae.var_owner[g] == comp.name)
-        n_out = sum(1 for p in comp.fluid_ports() if p.role == "outlet")
-        if n_eq != n_own + n_out:
-            what = "too many" if n_eq > n_own + n_out else "too few"
+        if n_eq != n_own:
+            what = "too many" if n_eq > n_own else "too few"
             report.errors.append(
                 f"component '{comp.name}' ({type(comp).__name__}) declares {n_eq} equations for "
-                f"{n_own} own "
-                f"variables and {n_out} outlet enthalpies ({n_own + n_out} needed): {what} "
-                "equations"
+                f"{n_own} own variables: {what} equations"
             )
     if dae.n_equations != dae.n:
         report.errors.append(
@@ -191,6 +221,8 @@ def _check_matching(plant, dae, report):
     ]
     over, under = _matching(dae.n_equations, dae.n, idx_rows)
     plain = _pressure_conflicts(plant)
+    for comp in plant.components.values():
+        plain += comp.structure_problems()
     for text in plain:
         report.errors.append(text)
     if over or under:
@@ -240,15 +272,17 @@ def _pressure_conflicts(plant):
     for (cname, pname), node in plant.connections.items():
         port = plant.components[cname].port(pname)
         if port.pressure in ("storage", "fixed"):
-            owners[find(node)].append((cname, pname, port.pressure, node))
+            owners[find(node)].append((cname, pname, port.pressure, node, port.pressure_param))
     out = []
     for who in owners.values():
         if len(who) < 2:
             continue
         nodes = sorted({w[3] for w in who})
         parts = []
-        for cname, pname, kind, _ in who:
+        for cname, pname, kind, _, param in who:
             what = "a storage volume" if kind == "storage" else "a fixed pressure"
+            if kind == "storage" and param is not None:
+                what += f": its friction parameter '{param}' is 0"
             parts.append(f"'{cname}' ({what}, port '{pname}')")
         out.append(
             f"node{'s' if len(nodes) > 1 else ''} {', '.join(repr(n) for n in nodes)}: "

@@ -5,25 +5,38 @@ from __future__ import annotations
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Param, SignalPort, Variable
-from dnasim.components.physics import friction_dp, properties
+from dnasim.components.physics import (
+    PropertyArrays,
+    energy_in,
+    friction_dp,
+    properties,
+    upwind_mean,
+)
 
 
 class Attemperator(Component):
     """Fully mixed control volume V with a steam inlet, a spray-water inlet and an outlet.
 
-    The volume's state is the outlet node (p, h). Symbols: m_steam, m_water,
-    m_out [kg/s]; M [kg], U [J] fluid mass and internal energy; T [K] outlet temperature.
+    The volume has its own state p_v [Pa], h_v [J/kg]. Symbols: m_steam, m_water
+    [kg/s] flows into the volume, m_out [kg/s] flow out (each may reverse);
+    M [kg], U [J] fluid mass and internal energy; T [K] volume temperature;
+    E_in(m, h_node, h_v) = w(m) h_node - w(-m) h_v the upwind port energy flow
+    (``physics.energy_in``); fluid leaves through every port with h_v.
 
       mass             dM/dt = m_steam + m_water - m_out
-      energy           dU/dt = m_steam h_steam + m_water h_water - m_out h
-      density          M = V rho(p, h)
-      internal_energy  U = M u(p, h)
-      steam_friction   p_steam - p = k m_steam sqrt(m_steam^2 + m_reg^2) / rho_steam
-      water_pressure   p_water = p      (the spray valve upstream is the resistance)
-      temperature      T = T(p, h)      (signal output T_out)
+      energy           dU/dt = E_in(m_steam, h_steam) + E_in(m_water, h_water)
+                               + E_in(-m_out, h_outlet_node)
+      density          M = V rho(p_v, h_v)
+      internal_energy  U = M u(p_v, h_v)
+      steam_friction   p_steam - p_v = k m_steam sqrt(m_steam^2 + m_reg^2) / rho_f
+                       (rho_f: smooth upwind of the steam node's and the volume's density)
+      water_pressure   p_water = p_v      (the spray valve upstream is the resistance)
+      outlet_pressure  p_out = p_v
+      temperature      T = T(p_v, h_v)    (signal output T_out)
 
-    At steady state h = (m_steam h_steam + m_water h_water)/(m_steam + m_water).
-    The outlet is a storage volume: lead it to a valve or another resistance.
+    At steady state h_v = (m_steam h_steam + m_water h_water)/(m_steam + m_water).
+    The outlet and the water inlet are storage volumes: lead them to a valve or
+    another resistance.
     """
 
     PARAMS = (
@@ -44,15 +57,31 @@ class Attemperator(Component):
         FluidPort(
             "water_in", "inlet", "m_water", "storage", "spray water in (pressure = volume pressure)"
         ),
-        FluidPort(
-            "outlet", "outlet", "m_out", "storage", "mixed steam out; its node is the volume state"
-        ),
+        FluidPort("outlet", "outlet", "m_out", "storage", "mixed steam out (pressure = volume's)"),
     )
     SIGNAL_OUTPUTS = (SignalPort("T_out", "K", "outlet temperature", variable="T"),)
 
     def setup(self):
         mn = self.params["m_nominal"]
         self.m_reg = self.params["m_reg"] if self.params["m_reg"] is not None else 1e-4 * mn
+        self._props = PropertyArrays()
+
+    def fluid_ports(self):
+        eps = self.m_eps
+        steam_role = "resistance" if self.params["k"] > 0 else "storage"
+        return [
+            FluidPort(
+                "steam_in",
+                "inlet",
+                "m_steam",
+                steam_role,
+                h_out="h_v",
+                pressure_param="k",
+                m_eps=eps,
+            ),
+            FluidPort("water_in", "inlet", "m_water", "storage", h_out="h_v", m_eps=eps),
+            FluidPort("outlet", "outlet", "m_out", "storage", h_out="h_v", m_eps=eps),
+        ]
 
     def variables(self):
         mn = self.params["m_nominal"]
@@ -63,40 +92,52 @@ class Attemperator(Component):
             Variable("m_out", "kg/s", mn, doc="flow out"),
             Variable("M", "kg", M_nom, doc="fluid mass"),
             Variable("U", "J", M_nom * 1e3, doc="fluid internal energy"),
-            Variable("T", "K", 300.0, doc="outlet temperature"),
+            Variable("p_v", "Pa", 1e5, doc="pressure of the volume"),
+            Variable("h_v", "J/kg", 1e5, doc="specific enthalpy of the volume"),
+            Variable("T", "K", 300.0, doc="temperature of the volume (outlet temperature)"),
         ]
 
     def equations(self):
+        flows = ("m_steam", "m_water", "m_out")
         return [
-            Equation("mass", y=("m_steam", "m_water", "m_out"), yp=("M",)),
+            Equation("mass", y=flows, yp=("M",)),
             Equation(
                 "energy",
-                y=("m_steam", "m_water", "m_out", "steam_in.h", "water_in.h", "outlet.h"),
+                y=flows + ("steam_in.h", "water_in.h", "outlet.h", "h_v"),
                 yp=("U",),
             ),
-            Equation("density", y=("M", "outlet.p", "outlet.h")),
-            Equation("internal_energy", y=("U", "M", "outlet.p", "outlet.h")),
-            Equation("steam_friction", y=("steam_in.p", "steam_in.h", "outlet.p", "m_steam")),
-            Equation("water_pressure", y=("water_in.p", "outlet.p")),
-            Equation("temperature", y=("T", "outlet.p", "outlet.h")),
+            Equation("density", y=("M", "p_v", "h_v")),
+            Equation("internal_energy", y=("U", "M", "p_v", "h_v")),
+            Equation("steam_friction", y=("steam_in.p", "steam_in.h", "p_v", "h_v", "m_steam")),
+            Equation("water_pressure", y=("water_in.p", "p_v")),
+            Equation("outlet_pressure", y=("outlet.p", "p_v")),
+            Equation("temperature", y=("T", "p_v", "h_v")),
         ]
 
     def residual(self, t, x, xp):
-        T, rho, u = properties(
-            self.medium, [x["steam_in.p"], x["outlet.p"]], [x["steam_in.h"], x["outlet.h"]]
+        T, rho, u = self._props(
+            self.medium,
+            np.array([x["steam_in.p"], x["p_v"]]),
+            np.array([x["steam_in.h"], x["h_v"]]),
         )
         ms, mw, mo = x["m_steam"], x["m_water"], x["m_out"]
-        h = x["outlet.h"]
+        hv = x["h_v"]
+        eps = self.m_eps
+        E = (
+            energy_in(ms, x["steam_in.h"], hv, eps)
+            + energy_in(mw, x["water_in.h"], hv, eps)
+            + energy_in(-mo, x["outlet.h"], hv, eps)
+        )
+        rho_f = upwind_mean(ms, rho[0], rho[1], eps)
         return np.array(
             [
                 xp["M"] - (ms + mw - mo),
-                xp["U"] - (ms * x["steam_in.h"] + mw * x["water_in.h"] - mo * h),
+                xp["U"] - E,
                 x["M"] - self.params["V"] * rho[1],
                 x["U"] - x["M"] * u[1],
-                x["steam_in.p"]
-                - x["outlet.p"]
-                - friction_dp(self.params["k"], ms, rho[0], self.m_reg),
-                x["water_in.p"] - x["outlet.p"],
+                x["steam_in.p"] - x["p_v"] - friction_dp(self.params["k"], ms, rho_f, self.m_reg),
+                x["water_in.p"] - x["p_v"],
+                x["outlet.p"] - x["p_v"],
                 x["T"] - T[1],
             ]
         )
@@ -112,11 +153,12 @@ class Attemperator(Component):
         p = P["p0"] if P["p0"] is not None else x["outlet.p"]
         h = self.medium.h_pT(p, P["T0"]) if P["T0"] is not None else x["outlet.h"]
         x["outlet.p"], x["outlet.h"] = p, h
+        x["p_v"], x["h_v"] = p, h
         x["water_in.p"] = p
         T, rho, u = properties(self.medium, [p], [h])
         x["M"] = P["V"] * rho[0]
         x["U"] = x["M"] * u[0]
         x["T"] = T[0]
         x["m_steam"] = P["m_nominal"]
-        x["m_water"] = 0.0
-        x["m_out"] = P["m_nominal"]
+        x["m_water"] = 0.05 * P["m_nominal"]
+        x["m_out"] = 1.05 * P["m_nominal"]

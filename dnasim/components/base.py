@@ -28,13 +28,16 @@ Local variable names seen by a component:
 The framework (``dnasim.assembly``) maps these local names into the global
 vector. Components never see the solver.
 
-Design-direction convention: a fluid port is an ``"inlet"`` or an ``"outlet"``.
-Flow variables are positive in the design direction (into the component at an
-inlet, out of it at an outlet). The component that owns the outlet port attached
-to a node supplies the equation that fixes that node's enthalpy (upwind in the
-design direction); every node has exactly one such outlet. Reverse flow is
-allowed in the momentum equations (valve, pipe friction) but enthalpy is always
-taken from the design upstream side.
+Flows and enthalpies (stream variables, see ``dnasim.assembly``): a fluid port
+is an ``"inlet"`` or an ``"outlet"``; this is only the sign convention of the
+port's flow variable (positive in the design direction: into the component at
+an inlet, out of it at an outlet). Flow may go either way. A node's ``h`` is the
+mixed enthalpy of the fluid flowing *into* the node; each port declares
+``h_out``, the local name of the enthalpy the component delivers when fluid
+leaves it through that port (a storage volume: its own h; a valve: the node h at
+its other port; a boundary: its supply enthalpy). Every energy flow at a port
+is computed with ``dnasim.components.physics.energy_in`` (upwind by the actual
+flow), which makes energy conservation across nodes exact.
 
 Adding a component: subclass ``Component`` in one file, import it in
 ``dnasim/components/__init__.py`` (or anywhere before use); the subclass
@@ -106,10 +109,18 @@ class Param:
 class FluidPort:
     """A fluid port bound to a node carrying p [Pa] and h [J/kg].
 
-    role: "inlet", "outlet" (this component fixes the node enthalpy) or "probe"
+    role: "inlet" or "outlet" (the sign convention of ``flow``), or "probe"
     (reads p and h, carries no flow).
     flow: the local variable (or vector element, e.g. "m[0]") holding the mass flow
     through the port, positive in the design direction [kg/s]; None for probes.
+    h_out: local name of the specific enthalpy [J/kg] the component delivers into
+    the node when fluid leaves the component through this port ("h_v[3]",
+    "inlet.h", "h_supply"); None for probes.
+    h_source: True when ``h_out`` is set by the component itself (a storage
+    volume's state, a given supply enthalpy); False when it is passed through
+    from the component's other ports (valves, junctions) or is the node's own h
+    (a sink). A group of nodes joined by pass-through components needs at least one
+    source port, otherwise nothing sets its enthalpy.
     pressure: how the component ties the node pressure, used to explain
     structural problems in plain words:
       "storage"    the node pressure is the state of a storage volume of this component
@@ -119,6 +130,10 @@ class FluidPort:
                    "equal" ports (junctions without resistance);
       "resistance" a flow resistance sits between the node and the component's interior;
       "none"       the component does not relate the node pressure to anything.
+    pressure_param: the parameter whose zero value made the port "storage" instead
+    of "resistance" (e.g. "k" of a Pipe with k = 0), named in structure messages.
+    m_eps: flow scale [kg/s] of the smooth upwind weight w(m) at this port
+    (``physics.upwind_weight``); the node's mixing equation uses the same value.
     """
 
     name: str
@@ -126,6 +141,10 @@ class FluidPort:
     flow: str | None
     pressure: str = "resistance"
     doc: str = ""
+    h_out: str | None = None
+    h_source: bool = True
+    pressure_param: str | None = None
+    m_eps: float = 1e-6
 
 
 @dataclass(frozen=True)
@@ -184,6 +203,13 @@ class Switch:
     ``action(t, x, xp)``, which changes the component's discrete state (and so the
     form of its residual). Convention used here: g is positive while the current
     mode is valid and crosses to negative when the mode must change.
+
+    size: 1 for a scalar g, else g returns an array of ``size`` values (a vector
+    switch, e.g. one entry per volume and phase line); ``names`` then names each
+    entry. restart: restart at order 1 at the located crossing although there is
+    no action (a kink of the residual, e.g. a property crossing a phase line).
+    terminal: stop the run at the crossing; ``message(t)`` then gives the plain
+    reason (used by ``dnasim.results``).
     """
 
     name: str
@@ -191,6 +217,11 @@ class Switch:
     direction: int = -1
     action: Callable | None = None
     doc: str = ""
+    size: int = 1
+    restart: bool = False
+    terminal: bool = False
+    names: list | None = None
+    message: Callable | None = None
 
 
 @dataclass(frozen=True)
@@ -354,6 +385,20 @@ class Component:
         """Value of parameter ``name`` at time t (time functions are evaluated)."""
         v = self.params[name]
         return v(t) if isinstance(v, TimeFunction) or callable(v) else v
+
+    @property
+    def m_eps(self) -> float:
+        """Flow scale of the smooth upwind weight at this component's ports [kg/s]:
+        ``physics.M_EPS_REL`` times the parameter m_nominal (1 kg/s without one)."""
+        from dnasim.components.physics import M_EPS_REL
+
+        m_nom = self.params.get("m_nominal") or 1.0
+        return M_EPS_REL * float(m_nom)
+
+    def structure_problems(self) -> list[str]:
+        """Hook: plain-words problems of the parameter set that make the DAE
+        index 2 inside the component (reported by ``Plant.check()``)."""
+        return []
 
     def breakpoints(self) -> list[float]:
         """Times at which a time-function parameter or its slope jumps."""

@@ -3,43 +3,72 @@
 
 Layout (n volumes, faces j = 0..n, volume i between faces i and i+1):
 
-    inlet node --face 0--> [vol 0] --face 1--> [vol 1] ... [vol n-1] = outlet node
+    inlet node --face 0--> [vol 0] --face 1--> [vol 1] ... [vol n-1] --face n--> outlet node
 
-Each face carries the flow resistance (friction and height), each volume the
-storage. The state of the last volume is the outlet node (p, h); the states of
-the other volumes are internal variables ``p_v[i]``, ``h_v[i]``. The upstream
-state of volume i ("up") is the inlet node for i = 0, else volume i-1.
+Faces 0..n-1 carry the flow resistance (friction and height); face n joins the
+last volume to the outlet node without resistance (its pressure is tied:
+p_outlet_node = p_v[n-1]). Every volume has its own state p_v[i] [Pa], h_v[i]
+[J/kg]. Flow may go either way through every face; energy is carried upwind of
+the actual flow.
 
-Symbols (prefix omitted): m[j] face flows [kg/s] (m[0] is the inlet flow,
-m[n] the outlet flow), M[i] fluid mass [kg], U[i] fluid internal energy [J],
-Q[i] heat from fluid to wall [W], T_w the wall temperature next to volume i [K].
+Symbols (prefix omitted): m[j] face flows [kg/s] positive from inlet to outlet
+(m[0] is the flow into the channel at the inlet port, m[n] the flow out at the
+outlet port), M[i] fluid mass [kg], U[i] fluid internal energy [J], Q[i] heat
+from fluid to wall [W], T_w the wall temperature next to volume i [K]. The
+states along the channel, left to right, are S_0 = inlet node, S_1..S_n = the
+volumes, S_{n+1} = outlet node (p, h, and T, rho, u from the medium).
 Per volume, with V_i = V/n, kA_i = kA/n, k_i = k/n, dz_i = dz/n:
 
+    face energy flow    E[j] = w(m[j]) h(S_j) - w(-m[j]) h(S_{j+1})           [W]
+                        (``physics.energy_in``; E[0] and -E[n] are the port energy flows)
     mass[i]             dM[i]/dt = m[i] - m[i+1]
-    energy[i]           dU[i]/dt = m[i] h_up - m[i+1] h_i - Q[i]
-    density[i]          M[i] = V_i rho(p_i, h_i)
-    internal_energy[i]  U[i] = M[i] (u_up + u_i)/2        ("mean", seed eq. 10.12c)
-                        U[i] = M[i] u_i                    ("outlet", fully mixed)
-    heat[i]             Q[i] = kA_i LMTD(T_up - T_w, T_i - T_w)     ("lmtd", seed eq. 10.12e)
-                        Q[i] = kA_i (T_i - T_w)                    ("outlet", upwind)
-                        Q[i] = kA_i ((T_up + T_i)/2 - T_w)         ("mean")
-    momentum[i]         p_up - p_i = k_i m[i] sqrt(m[i]^2 + m_reg^2)/rho_up + rho_up g dz_i
+    energy[i]           dU[i]/dt = E[i] - E[i+1] - Q[i]
+    density[i]          M[i] = V_i rho(p_v[i], h_v[i])
+    internal_energy[i]  U[i] = M[i] u_i                      ("outlet", fully mixed; default)
+                        U[i] = M[i] (u_a + u_i)/2            ("mean", seed eq. 10.12c)
+    heat[i]             Q[i] = kA_i LMTD(T_a - T_w, T_i - T_w)     ("lmtd", seed eq. 10.12e)
+                        Q[i] = kA_i (T_i - T_w)                   ("outlet", upwind)
+                        Q[i] = kA_i ((T_a + T_i)/2 - T_w)         ("mean")
+    momentum[i]         p(S_i) - p_v[i] = dp_f(m[i], rho_f) + rho_f g dz_i      (face i)
+    outlet_pressure     p(S_{n+1}) = p_v[n-1]
+
+where w is the smooth upwind weight (``physics.upwind_weight``, flow scale
+m_eps), x_a = (w(m[i]) x(S_i) + w(-m[i+1]) x(S_{i+2})) / (w(m[i]) + w(-m[i+1]))
+is the state flowing into volume i (from the left in forward flow, from the
+right in reverse flow), and rho_f = ``physics.upwind_mean`` of the densities on
+the two sides of the face. The friction law dp_f is k_i m sqrt(m^2 + m_reg^2)/rho
+(``physics.friction_dp``) or, when a nominal pressure drop is given instead of
+k, dp_nominal/n m sqrt(m^2 + m_reg^2)/m_nominal^2.
 
 The conserved quantities M and U are the differential states, so mass and
 energy are conserved by the integrator to the Newton tolerance; (p, h) of each
 volume follow from the algebraic equations density and internal_energy.
 
-Note on "mean": with U = M (u_up + u_i)/2, a jump of the inlet enthalpy moves the
-outlet enthalpy the opposite way at once (U cannot jump). This is a property of
-the seed's lumped model; use smooth inlet changes, more volumes, or "outlet".
+Note on "mean": with U = M (u_a + u_i)/2, a jump of the inflow enthalpy moves the
+volume's enthalpy the opposite way at once (U cannot jump): after a +100 K inlet
+step the outlet of a one-volume pipe jumps down. It is the seed's lumped model,
+kept as an option; "outlet" (a mixed volume) is the default.
+
+Phase switches (optional, for condensable media): per volume the vector switch
+g = [h_v[i] - h_liq(p_v[i]), h_vap(p_v[i]) - h_v[i]] marks the crossing of the
+saturated-liquid and saturated-vapour lines; restart-only (no action).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from dnasim.components.base import Equation, Variable
-from dnasim.components.physics import G, PropertyArrays, friction_dp, lmtd, properties
+from dnasim.components.base import Equation, Switch, Variable
+from dnasim.components.physics import (
+    M_EPS_REL,
+    G,
+    PropertyArrays,
+    friction_dp,
+    lmtd,
+    saturation_enthalpies,
+    upwind_mean,
+    upwind_weight,
+)
 
 
 class Channel:
@@ -53,7 +82,7 @@ class Channel:
         outlet: str,
         n: int,
         V: float,
-        k: float,
+        k: float | None,
         dz: float,
         kA: float,
         m_nominal: float,
@@ -62,53 +91,61 @@ class Channel:
         internal_energy: str,
         wall: list[str],
         heat_transfer: str = "lmtd",
+        dp_nominal: float | None = None,
     ):
         self.prefix = prefix
         self.inlet, self.outlet = inlet, outlet
         self.n = n
         self.V_i = V / n
-        self.k_i = k / n
+        self.k_i = None if k is None else k / n
         self.dz_i = dz / n
         self.kA_i = kA / n
         self.m_nominal = m_nominal
+        self.m_eps = M_EPS_REL * max(m_nominal, 1e-12)
         self.m_reg = m_reg
         self.dT_reg = dT_reg
         self.mean = internal_energy == "mean"
         self.heat_transfer = heat_transfer
+        # friction per face: k law, or nominal-point law dp = c m sqrt(m^2 + m_reg^2)
+        self.c_i = None
+        if self.k_i is None:
+            self.c_i = (dp_nominal or 0.0) / n / max(m_nominal, 1e-12) ** 2
         self.wall = wall  # local name of the wall temperature next to each volume
         P = prefix
         self.m, self.M, self.U, self.Q = P + "m", P + "M", P + "U", P + "Q"
         self.pv, self.hv = P + "p_v", P + "h_v"
         self._props = PropertyArrays()
 
-    # names of the state of volume i and of its upstream state
-    def p_name(self, i):
-        return f"{self.outlet}.p" if i == self.n - 1 else f"{self.pv}[{i}]"
+    @property
+    def frictionless(self) -> bool:
+        return (self.k_i if self.k_i is not None else self.c_i) == 0.0
 
-    def h_name(self, i):
-        return f"{self.outlet}.h" if i == self.n - 1 else f"{self.hv}[{i}]"
-
-    def up(self, i):
-        if i == 0:
+    # local names of state S_j (0 = inlet node, 1..n = volumes, n+1 = outlet node)
+    def state_names(self, j):
+        if j == 0:
             return f"{self.inlet}.p", f"{self.inlet}.h"
-        return self.p_name(i - 1), self.h_name(i - 1)
+        if j == self.n + 1:
+            return f"{self.outlet}.p", f"{self.outlet}.h"
+        return f"{self.pv}[{j - 1}]", f"{self.hv}[{j - 1}]"
+
+    def h_out_inlet(self):
+        return f"{self.hv}[0]"
+
+    def h_out_outlet(self):
+        return f"{self.hv}[{self.n - 1}]"
 
     def variables(self, M_nominal, U_nominal, p_nominal, h_nominal, Q_nominal):
         n = self.n
-        out = [
+        return [
             Variable(
                 self.m, "kg/s", self.m_nominal, n + 1, "flow through face j (0 = inlet, n = outlet)"
             ),
             Variable(self.M, "kg", M_nominal, n, "fluid mass in volume i"),
             Variable(self.U, "J", U_nominal, n, "fluid internal energy in volume i"),
             Variable(self.Q, "W", Q_nominal, n, "heat flow from fluid to wall in volume i"),
+            Variable(self.pv, "Pa", p_nominal, n, "pressure of volume i"),
+            Variable(self.hv, "J/kg", h_nominal, n, "specific enthalpy of volume i"),
         ]
-        if n > 1:
-            out += [
-                Variable(self.pv, "Pa", p_nominal, n - 1, "pressure of inner volume i"),
-                Variable(self.hv, "J/kg", h_nominal, n - 1, "enthalpy of inner volume i"),
-            ]
-        return out
 
     def equations(self):
         n = self.n
@@ -116,45 +153,51 @@ class Channel:
         eqs = {k: [] for k in ("mass", "energy", "density", "internal_energy", "heat", "momentum")}
         P = self.prefix
         for i in range(n):
-            pi, hi = self.p_name(i), self.h_name(i)
-            pu, hu = self.up(i)
+            pl, hl = self.state_names(i)
+            pi, hi = self.state_names(i + 1)
+            pr, hr = self.state_names(i + 2)
             mi, mo = f"{m}[{i}]", f"{m}[{i + 1}]"
             eqs["mass"].append(Equation(f"{P}mass[{i}]", y=(mi, mo), yp=(f"{M}[{i}]",)))
             eqs["energy"].append(
-                Equation(f"{P}energy[{i}]", y=(mi, mo, hu, hi, f"{Q}[{i}]"), yp=(f"{U}[{i}]",))
+                Equation(f"{P}energy[{i}]", y=(mi, mo, hl, hi, hr, f"{Q}[{i}]"), yp=(f"{U}[{i}]",))
             )
             eqs["density"].append(Equation(f"{P}density[{i}]", y=(f"{M}[{i}]", pi, hi)))
-            ie = (f"{U}[{i}]", f"{M}[{i}]", pi, hi) + ((pu, hu) if self.mean else ())
+            inflow = (mi, mo, pl, hl, pr, hr)
+            ie = (f"{U}[{i}]", f"{M}[{i}]", pi, hi) + (inflow if self.mean else ())
             eqs["internal_energy"].append(Equation(f"{P}internal_energy[{i}]", y=ie))
-            eqs["heat"].append(
-                Equation(f"{P}heat[{i}]", y=(f"{Q}[{i}]", self.wall[i], pu, hu, pi, hi))
-            )
-            eqs["momentum"].append(Equation(f"{P}momentum[{i}]", y=(pu, pi, hu, mi)))
-        return [e for block in eqs.values() for e in block]
-
-    def states(self, x):
-        """Pressure and enthalpy of the n volumes, and of the inlet node (arrays)."""
-        n = self.n
-        p = np.empty(n)
-        h = np.empty(n)
-        if n > 1:
-            p[:-1] = x[self.pv]
-            h[:-1] = x[self.hv]
-        p[-1] = x[f"{self.outlet}.p"]
-        h[-1] = x[f"{self.outlet}.h"]
-        return p, h
+            ht = (f"{Q}[{i}]", self.wall[i], pi, hi)
+            if self.heat_transfer != "outlet":
+                ht += inflow
+            eqs["heat"].append(Equation(f"{P}heat[{i}]", y=ht))
+            eqs["momentum"].append(Equation(f"{P}momentum[{i}]", y=(pl, hl, pi, hi, mi)))
+        out = [e for block in eqs.values() for e in block]
+        po, _ = self.state_names(n + 1)
+        out.append(Equation(f"{P}outlet_pressure", y=(po, f"{self.pv}[{n - 1}]")))
+        return out
 
     def evaluate(self, medium, x):
-        """Property arrays: (p, h, T, rho, u) with n + 1 entries, entry 0 = inlet node,
-        entry i + 1 = volume i."""
-        pv, hv = self.states(x)
-        p = np.concatenate(([x[f"{self.inlet}.p"]], pv))
-        h = np.concatenate(([x[f"{self.inlet}.h"]], hv))
+        """Property arrays (p, h, T, rho, u) of the n + 2 states S_0..S_{n+1}."""
+        p = np.concatenate(([x[f"{self.inlet}.p"]], x[self.pv], [x[f"{self.outlet}.p"]]))
+        h = np.concatenate(([x[f"{self.inlet}.h"]], x[self.hv], [x[f"{self.outlet}.h"]]))
         T, rho, u = self._props(medium, p, h)
         return p, h, T, rho, u
 
+    def inflow_weights(self, m):
+        """(a, b): weights of the left and right neighbour in the inflow state of each
+        volume, a = w(m[i]), b = w(-m[i+1])."""
+        return upwind_weight(m[:-1], self.m_eps), upwind_weight(-m[1:], self.m_eps)
+
+    def face_energy(self, m, h):
+        """E[j] = w(m[j]) h(S_j) - w(-m[j]) h(S_{j+1}) for faces j = 0..n [W]."""
+        return upwind_weight(m, self.m_eps) * h[:-1] - upwind_weight(-m, self.m_eps) * h[1:]
+
+    def friction(self, m, rho):
+        if self.k_i is not None:
+            return friction_dp(self.k_i, m, rho, self.m_reg)
+        return self.c_i * m * np.sqrt(m * m + self.m_reg * self.m_reg)
+
     def residual_blocks(self, x, xp, props, T_wall):
-        """Residuals in the order of ``equations()`` (six blocks of n)."""
+        """Residuals in the order of ``equations()`` (six blocks of n, then one)."""
         p, h, T, rho, u = props
         m = x[self.m]
         M = x[self.M]
@@ -162,46 +205,81 @@ class Channel:
         Q = x[self.Q]
         dM = xp[self.M]
         dU = xp[self.U]
+        E = self.face_energy(m, h)
         mass = dM - (m[:-1] - m[1:])
-        energy = dU - (m[:-1] * h[:-1] - m[1:] * h[1:] - Q)
-        density = M - self.V_i * rho[1:]
+        energy = dU - (E[:-1] - E[1:] - Q)
+        density = M - self.V_i * rho[1:-1]
+        a, b = self.inflow_weights(m)
+        if self.mean or self.heat_transfer != "outlet":
+            s = a + b
+            T_a = (a * T[:-2] + b * T[2:]) / s
         if self.mean:
-            internal = U - M * 0.5 * (u[:-1] + u[1:])
+            u_a = (a * u[:-2] + b * u[2:]) / s
+            internal = U - M * 0.5 * (u_a + u[1:-1])
         else:
-            internal = U - M * u[1:]
+            internal = U - M * u[1:-1]
+        T_i = T[1:-1]
         if self.heat_transfer == "lmtd":
-            dT = lmtd(T[:-1] - T_wall, T[1:] - T_wall, self.dT_reg)
+            dT = lmtd(T_a - T_wall, T_i - T_wall, self.dT_reg)
         elif self.heat_transfer == "outlet":
-            dT = T[1:] - T_wall
+            dT = T_i - T_wall
         else:  # "mean"
-            dT = 0.5 * (T[:-1] + T[1:]) - T_wall
+            dT = 0.5 * (T_a + T_i) - T_wall
         heat = Q - self.kA_i * dT
-        momentum = (
-            p[:-1]
-            - p[1:]
-            - friction_dp(self.k_i, m[:-1], rho[:-1], self.m_reg)
-            - rho[:-1] * G * self.dz_i
-        )
-        return [mass, energy, density, internal, heat, momentum]
+        mf = m[:-1]
+        rho_f = upwind_mean(mf, rho[:-2], rho[1:-1], self.m_eps)
+        momentum = p[:-2] - p[1:-1] - self.friction(mf, rho_f) - rho_f * G * self.dz_i
+        outlet_pressure = np.array([p[-1] - p[-2]])
+        return [mass, energy, density, internal, heat, momentum, outlet_pressure]
+
+    def switches(self, medium):
+        """The phase switch of the n volumes (see the module doc): one vector Switch."""
+        n = self.n
+        names = []
+        for i in range(n):
+            names += [
+                f"{self.hv}[{i}] saturated liquid",
+                f"{self.hv}[{i}] saturated vapour",
+            ]
+
+        def g(t, x, xp):
+            pv = np.asarray(x[self.pv], dtype=float)
+            hv = np.asarray(x[self.hv], dtype=float)
+            hl, hvap = saturation_enthalpies(medium, pv)
+            out = np.empty(2 * n)
+            # above the critical pressure there is no line to cross: a constant sign
+            out[0::2] = np.where(np.isfinite(hl), hv - hl, 1.0)
+            out[1::2] = np.where(np.isfinite(hvap), hvap - hv, 1.0)
+            return out
+
+        return [
+            Switch(
+                f"{self.prefix}phase",
+                g,
+                direction=0,
+                size=2 * n,
+                restart=True,
+                names=names,
+                doc="crossing of the saturated-liquid / saturated-vapour line, per volume",
+            )
+        ]
 
     def guess(self, x, medium, p_vol, h_vol, m_guess):
         """Fill guesses from volume states (arrays of n), uniform flow, Q = 0.
 
-        The inlet node must already hold its guess. Returns T (n + 1 entries,
-        entry 0 = inlet node)."""
-        n = self.n
+        The inlet node must already hold its guess; the outlet node gets the last
+        volume's state. Returns T of the n volumes."""
         p_vol = np.asarray(p_vol, dtype=float)
         h_vol = np.asarray(h_vol, dtype=float)
-        if n > 1:
-            x[self.pv] = p_vol[:-1]
-            x[self.hv] = h_vol[:-1]
+        x[self.pv] = p_vol
+        x[self.hv] = h_vol
         x[f"{self.outlet}.p"] = p_vol[-1]
         x[f"{self.outlet}.h"] = h_vol[-1]
-        p = np.concatenate(([x[f"{self.inlet}.p"]], p_vol))
-        h = np.concatenate(([x[f"{self.inlet}.h"]], h_vol))
-        T, rho, u = properties(medium, p, h)
+        _, _, T, rho, u = self.evaluate(medium, x)
         x[self.m] = m_guess
-        x[self.M] = self.V_i * rho[1:]
-        x[self.U] = self.V_i * rho[1:] * (0.5 * (u[:-1] + u[1:]) if self.mean else u[1:])
+        a, b = self.inflow_weights(np.full(self.n + 1, float(m_guess)))
+        u_a = (a * u[:-2] + b * u[2:]) / (a + b)
+        x[self.M] = self.V_i * rho[1:-1]
+        x[self.U] = self.V_i * rho[1:-1] * (0.5 * (u_a + u[1:-1]) if self.mean else u[1:-1])
         x[self.Q] = 0.0
-        return T
+        return T[1:-1]

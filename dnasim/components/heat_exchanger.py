@@ -6,6 +6,7 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
+from dnasim.components.physics import is_condensable
 from dnasim.errors import PlantError
 
 
@@ -13,15 +14,25 @@ class HeatExchanger(Component):
     """Counter-flow heat exchanger: a hot and a cold channel of n_sections volumes
     each, sharing a wall. Hot section i faces cold section n-1-i (counter-flow).
 
-    Each channel is a series of volumes as in ``Pipe`` (prefix hot_ / cold_):
-    mass, energy, density, internal_energy, heat, momentum per volume, with
-      heat      Q_side[i] = kA_side/n LMTD(T_up - T_w, T_i - T_w)   (fluid -> wall)
+    Each channel is a series of volumes as in ``Pipe`` (prefix hot_ / cold_;
+    ``dnasim.components.channel``): mass, energy, density, internal_energy, heat,
+    momentum per volume and the outlet pressure tie, with energy upwind of the
+    actual flow (either direction), U = M u per volume (mixed volumes), and
+      heat      Q_side[i] = kA_side/n LMTD(T_a - T_w, T_i - T_w)   (fluid -> wall)
     and the wall, section i (C_i = C_wall/n):
       wall[i]   C_i dT_w[i]/dt = hot_Q[i] + cold_Q[n-1-i]
+
+    Friction per side, per section: with side_k given, dp = k/n m sqrt(m^2 + m_reg^2)/rho;
+    otherwise the nominal-point law dp = side_dp_nominal/n m sqrt(m^2 + m_reg^2)/m_nominal^2
+    (side_dp_nominal [Pa] is the pressure drop of the side at m_nominal, default
+    0.1 bar). A side without friction (k = 0 or dp_nominal = 0) joins storage
+    volumes with no resistance: index 2, reported by ``dnasim check``.
 
     Both fluids use the component's medium (one medium per component).
     Outlets are storage volumes (lead them to a resistance).
     Given start: fluid temperatures hot_T0, cold_T0; wall at their mean.
+    Balances: d(sum M)/dt = inflows - outflows; d(U_hot + U_cold + C_wall T_w)/dt =
+    sum of the four port energy flows (no heat leaves the component).
     """
 
     PARAMS = (
@@ -29,8 +40,29 @@ class HeatExchanger(Component):
         Param("cold_V", "m3", doc="cold side volume", min=0.0),
         Param("hot_kA", "W/K", doc="hot side heat transfer coefficient times area", min=0.0),
         Param("cold_kA", "W/K", doc="cold side heat transfer coefficient times area", min=0.0),
-        Param("hot_k", "1/m4", 0.0, "hot side friction coefficient", min=0.0),
-        Param("cold_k", "1/m4", 0.0, "cold side friction coefficient", min=0.0),
+        Param("hot_k", "1/m4", None, "hot side friction coefficient (dp = k m|m|/rho)", min=0.0),
+        Param("cold_k", "1/m4", None, "cold side friction coefficient (dp = k m|m|/rho)", min=0.0),
+        Param(
+            "hot_dp_nominal",
+            "Pa",
+            1e4,
+            "hot side pressure drop at m_nominal (used when hot_k is not given)",
+            min=0.0,
+        ),
+        Param(
+            "cold_dp_nominal",
+            "Pa",
+            1e4,
+            "cold side pressure drop at m_nominal (used when cold_k is not given)",
+            min=0.0,
+        ),
+        Param(
+            "phase_switches",
+            "1",
+            False,
+            "locate crossings of the saturation lines per volume (condensable media)",
+            kind="bool",
+        ),
         Param("C_wall", "J/K", doc="wall heat capacity", min=0.0),
         Param("n_sections", "1", 1, "number of sections", min=1, kind="int"),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow", min=0.0),
@@ -47,7 +79,7 @@ class HeatExchanger(Component):
     )
     FLUID_PORTS = (
         FluidPort("hot_in", "inlet", "hot_m[0]", "resistance", "hot fluid in"),
-        FluidPort("hot_out", "outlet", "hot_m[n]", "storage", "hot fluid out"),
+        FluidPort("hot_out", "outlet", "hot_m[n]", "storage", "hot fluid out (storage)"),
         FluidPort("cold_in", "inlet", "cold_m[0]", "resistance", "cold fluid in"),
         FluidPort("cold_out", "outlet", "cold_m[n]", "storage", "cold fluid out"),
     )
@@ -67,23 +99,63 @@ class HeatExchanger(Component):
                 n=n,
                 V=P[f"{side}_V"],
                 k=P[f"{side}_k"],
+                dp_nominal=P[f"{side}_dp_nominal"],
                 dz=0.0,
                 kA=P[f"{side}_kA"],
                 m_nominal=P["m_nominal"],
                 m_reg=1e-4 * P["m_nominal"],
                 dT_reg=P["dT_reg"],
-                internal_energy="mean" if n == 1 else "outlet",
+                internal_energy="outlet",
                 wall=wall,
             )
 
     def fluid_ports(self):
         n = self.n
-        return [
-            FluidPort("hot_in", "inlet", "hot_m[0]", "resistance"),
-            FluidPort("hot_out", "outlet", f"hot_m[{n}]", "storage"),
-            FluidPort("cold_in", "inlet", "cold_m[0]", "resistance"),
-            FluidPort("cold_out", "outlet", f"cold_m[{n}]", "storage"),
-        ]
+        out = []
+        for side, ch in self.channels.items():
+            param = f"{side}_k" if self.params[f"{side}_k"] is not None else f"{side}_dp_nominal"
+            out += [
+                FluidPort(
+                    f"{side}_in",
+                    "inlet",
+                    f"{side}_m[0]",
+                    "storage" if ch.frictionless else "resistance",
+                    h_out=ch.h_out_inlet(),
+                    pressure_param=param,
+                    m_eps=ch.m_eps,
+                ),
+                FluidPort(
+                    f"{side}_out",
+                    "outlet",
+                    f"{side}_m[{n}]",
+                    "storage",
+                    h_out=ch.h_out_outlet(),
+                    m_eps=ch.m_eps,
+                ),
+            ]
+        return out
+
+    def structure_problems(self):
+        out = []
+        for side, ch in self.channels.items():
+            if self.n > 1 and ch.frictionless:
+                param = (
+                    f"{side}_k" if self.params[f"{side}_k"] is not None else f"{side}_dp_nominal"
+                )
+                out.append(
+                    f"component '{self.name}' (HeatExchanger): friction parameter '{param}' = 0 "
+                    f"with n_sections = {self.n}: the {side} side's storage volumes are joined "
+                    "with no flow resistance between them, so their pressures are set twice and "
+                    f"the DAE has index 2. Give {param} > 0."
+                )
+        return out
+
+    def switches(self):
+        if not (self.params["phase_switches"] and is_condensable(self.medium)):
+            return []
+        return self.channels["hot"].switches(self.medium) + self.channels["cold"].switches(
+            self.medium
+        )
 
     def variables(self):
         out = []
@@ -121,7 +193,7 @@ class HeatExchanger(Component):
     def output_values(self, t, x, xp):
         _, _, Th, _, _ = self.channels["hot"].evaluate(self.medium, x)
         _, _, Tc, _, _ = self.channels["cold"].evaluate(self.medium, x)
-        return [Th[-1], Tc[-1], float(np.sum(x["hot_Q"]))]
+        return [Th[-2], Tc[-2], float(np.sum(x["hot_Q"]))]
 
     def initial_guess(self, t0, x):
         n = self.n
@@ -136,4 +208,4 @@ class HeatExchanger(Component):
             else:
                 h = np.full(n, h_in)
             T[side] = ch.guess(x, self.medium, p, h, self.params["m_nominal"])
-        x["T_w"] = 0.5 * (T["hot"][1:] + T["cold"][1:][::-1])
+        x["T_w"] = 0.5 * (T["hot"] + T["cold"][::-1])

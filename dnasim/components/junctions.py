@@ -1,20 +1,76 @@
-"""Junctions without volume: Mixer (n inlets, one outlet) and Splitter (one inlet, n outlets)."""
+"""Junctions without volume: Mixer (n inlets, one outlet) and Splitter (one inlet,
+n outlets).
+
+Both are the same adiabatic junction without storage or friction; they differ
+only in the sign convention of their flow variables. Flow may go either way at
+every port. Symbols: m_k [kg/s] the flow INTO the junction at port k, h_k [J/kg]
+the node enthalpy at port k, w the smooth upwind weight
+(``physics.upwind_weight``), h_mix [J/kg] the mixed enthalpy of the inflows:
+
+  mass         sum_k m_k = 0
+  mixing       sum_k w(m_k) (h_k - h_mix) = 0
+  pressure_k   p_k = p_last                 (all ports at one pressure)
+
+Fluid leaving through any port carries h_mix. The energy flows into the
+junction, E_k = w(m_k) h_k - w(-m_k) h_mix, sum to h_mix sum_k m_k = 0 exactly.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Param, Variable
+from dnasim.components.physics import upwind_weight
 
 
-class Mixer(Component):
+class _Junction(Component):
+    REGISTER = False
+
+    def port_names(self) -> list[str]:
+        raise NotImplementedError
+
+    def flows_in(self, x) -> np.ndarray:
+        """Flows into the junction at each port (order of port_names)."""
+        raise NotImplementedError
+
+    def flow_names(self) -> list[str]:
+        raise NotImplementedError
+
+    def equations(self):
+        ports = self.port_names()
+        flows = tuple(self.flow_names())
+        hs = tuple(f"{p}.h" for p in ports)
+        eqs = [Equation("mass", y=flows), Equation("mixing", y=flows + hs + ("h_mix",))]
+        last = ports[-1]
+        eqs += [Equation(f"pressure_{p}", y=(f"{p}.p", f"{last}.p")) for p in ports[:-1]]
+        return eqs
+
+    def residual(self, t, x, xp):
+        ports = self.port_names()
+        m = self.flows_in(x)
+        h = np.array([x[f"{p}.h"] for p in ports])
+        p = np.array([x[f"{q}.p"] for q in ports])
+        w = upwind_weight(m, self.m_eps)
+        return np.concatenate(([m.sum(), np.dot(w, h - x["h_mix"])], p[:-1] - p[-1]))
+
+    def initial_guess(self, t0, x):
+        ports = self.port_names()
+        m = self.flows_in(x)
+        w = upwind_weight(m, self.m_eps)
+        h = np.array([x[f"{p}.h"] for p in ports])
+        x["h_mix"] = float(np.dot(w, h) / w.sum())
+
+
+class Mixer(_Junction):
     """Adiabatic junction of n_inlets streams into one, without storage or friction.
 
       mass        m_out = sum_k m_in[k]
-      energy      m_out h_out = sum_k m_in[k] h_in_k    (needs m_out != 0)
+      mixing      sum_k w(m_in[k]) (h_in_k - h_mix) + w(-m_out) (h_out - h_mix) = 0
       pressure_k  p_in_k = p_out                        (k = 1..n)
 
-    Ports inlet1..inlet<n>, outlet; m_in[k-1] is the flow through inlet<k>.
+    Ports inlet1..inlet<n>, outlet; m_in[k-1] is the flow through inlet<k>
+    (positive into the mixer), m_out the flow out. Any port may carry reverse
+    flow; fluid leaves through every port with h_mix (see the module doc).
     """
 
     PARAMS = (
@@ -27,57 +83,59 @@ class Mixer(Component):
         FluidPort("outlet", "outlet", "m_out", "equal", "mixed stream"),
     )
 
+    def port_names(self):
+        return [f"inlet{k + 1}" for k in range(self.params["n_inlets"])] + ["outlet"]
+
+    def flow_names(self):
+        return [f"m_in[{k}]" for k in range(self.params["n_inlets"])] + ["m_out"]
+
+    def flows_in(self, x):
+        return np.concatenate((x["m_in"], [-x["m_out"]]))
+
     def fluid_ports(self):
         n = self.params["n_inlets"]
-        return [FluidPort(f"inlet{k + 1}", "inlet", f"m_in[{k}]", "equal") for k in range(n)] + [
-            FluidPort("outlet", "outlet", "m_out", "equal")
+        eps = self.m_eps
+        return [
+            FluidPort(
+                f"inlet{k + 1}",
+                "inlet",
+                f"m_in[{k}]",
+                "equal",
+                h_out="h_mix",
+                h_source=False,
+                m_eps=eps,
+            )
+            for k in range(n)
+        ] + [
+            FluidPort(
+                "outlet", "outlet", "m_out", "equal", h_out="h_mix", h_source=False, m_eps=eps
+            )
         ]
 
     def variables(self):
         mn = self.params["m_nominal"]
         return [
-            Variable("m_in", "kg/s", mn, self.params["n_inlets"]),
-            Variable("m_out", "kg/s", mn),
+            Variable("m_in", "kg/s", mn, self.params["n_inlets"], "flow into the mixer at inlet k"),
+            Variable("m_out", "kg/s", mn, doc="flow out of the mixer"),
+            Variable("h_mix", "J/kg", 1e5, doc="mixed enthalpy of the inflows"),
         ]
-
-    def equations(self):
-        n = self.params["n_inlets"]
-        m_in = tuple(f"m_in[{k}]" for k in range(n))
-        h_in = tuple(f"inlet{k + 1}.h" for k in range(n))
-        eqs = [
-            Equation("mass", y=("m_out",) + m_in),
-            Equation("energy", y=("m_out", "outlet.h") + m_in + h_in),
-        ]
-        eqs += [Equation(f"pressure{k + 1}", y=(f"inlet{k + 1}.p", "outlet.p")) for k in range(n)]
-        return eqs
-
-    def residual(self, t, x, xp):
-        n = self.params["n_inlets"]
-        m_in = x["m_in"]
-        h_in = np.array([x[f"inlet{k + 1}.h"] for k in range(n)])
-        p_in = np.array([x[f"inlet{k + 1}.p"] for k in range(n)])
-        return np.concatenate(
-            (
-                [x["m_out"] - m_in.sum(), x["m_out"] * x["outlet.h"] - np.dot(m_in, h_in)],
-                p_in - x["outlet.p"],
-            )
-        )
 
     def initial_guess(self, t0, x):
         n = self.params["n_inlets"]
         x["m_in"] = self.params["m_nominal"] / n
         x["m_out"] = self.params["m_nominal"]
-        x["outlet.h"] = np.mean([x[f"inlet{k + 1}.h"] for k in range(n)])
+        super().initial_guess(t0, x)
 
 
-class Splitter(Component):
+class Splitter(_Junction):
     """Junction of one stream into n_outlets, without storage or friction.
 
       mass         m_in = sum_k m_out[k]
-      enthalpy_k   h_out_k = h_in
+      mixing       w(m_in) (h_in - h_mix) + sum_k w(-m_out[k]) (h_out_k - h_mix) = 0
       pressure_k   p_out_k = p_in         (k = 1..n)
 
-    The split ratio follows from the resistances downstream.
+    The split ratio follows from the resistances downstream. Any port may carry
+    reverse flow; fluid leaves through every port with h_mix (see the module doc).
     """
 
     PARAMS = (
@@ -90,35 +148,43 @@ class Splitter(Component):
         FluidPort("outlet1", "outlet", "m_out[0]", "equal", "first outlet (outlet2, ... likewise)"),
     )
 
+    def port_names(self):
+        return ["inlet"] + [f"outlet{k + 1}" for k in range(self.params["n_outlets"])]
+
+    def flow_names(self):
+        return ["m_in"] + [f"m_out[{k}]" for k in range(self.params["n_outlets"])]
+
+    def flows_in(self, x):
+        return np.concatenate(([x["m_in"]], -x["m_out"]))
+
     def fluid_ports(self):
         n = self.params["n_outlets"]
-        return [FluidPort("inlet", "inlet", "m_in", "equal")] + [
-            FluidPort(f"outlet{k + 1}", "outlet", f"m_out[{k}]", "equal") for k in range(n)
+        eps = self.m_eps
+        return [
+            FluidPort("inlet", "inlet", "m_in", "equal", h_out="h_mix", h_source=False, m_eps=eps)
+        ] + [
+            FluidPort(
+                f"outlet{k + 1}",
+                "outlet",
+                f"m_out[{k}]",
+                "equal",
+                h_out="h_mix",
+                h_source=False,
+                m_eps=eps,
+            )
+            for k in range(n)
         ]
 
     def variables(self):
         mn = self.params["m_nominal"]
         return [
-            Variable("m_in", "kg/s", mn),
-            Variable("m_out", "kg/s", mn, self.params["n_outlets"]),
+            Variable("m_in", "kg/s", mn, doc="flow into the splitter"),
+            Variable("m_out", "kg/s", mn, self.params["n_outlets"], "flow out at outlet k"),
+            Variable("h_mix", "J/kg", 1e5, doc="mixed enthalpy of the inflows"),
         ]
-
-    def equations(self):
-        n = self.params["n_outlets"]
-        eqs = [Equation("mass", y=("m_in",) + tuple(f"m_out[{k}]" for k in range(n)))]
-        eqs += [Equation(f"enthalpy{k + 1}", y=(f"outlet{k + 1}.h", "inlet.h")) for k in range(n)]
-        eqs += [Equation(f"pressure{k + 1}", y=(f"outlet{k + 1}.p", "inlet.p")) for k in range(n)]
-        return eqs
-
-    def residual(self, t, x, xp):
-        n = self.params["n_outlets"]
-        h = np.array([x[f"outlet{k + 1}.h"] for k in range(n)])
-        p = np.array([x[f"outlet{k + 1}.p"] for k in range(n)])
-        return np.concatenate(([x["m_in"] - x["m_out"].sum()], h - x["inlet.h"], p - x["inlet.p"]))
 
     def initial_guess(self, t0, x):
         n = self.params["n_outlets"]
         x["m_in"] = self.params["m_nominal"]
         x["m_out"] = self.params["m_nominal"] / n
-        for k in range(n):
-            x[f"outlet{k + 1}.h"] = x["inlet.h"]
+        super().initial_guess(t0, x)

@@ -7,35 +7,42 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
+from dnasim.components.physics import is_condensable
 from dnasim.errors import PlantError
 
 
 class Pipe(Component):
     """Lumped pipe with wall heat capacity (seed eqs. 10.12), n_volumes in series.
 
-    Each volume i (i = 0..n-1; V_i = V/n, kA_i = kA/n, k_i = k/n, C_i = C_wall/n):
+    Each volume i (i = 0..n-1; V_i = V/n, kA_i = kA/n, k_i = k/n, C_i = C_wall/n) has
+    its own state p_v[i], h_v[i]; energy is carried upwind of the actual flow, in
+    either direction (``dnasim.components.channel`` for the full equations):
 
       mass[i]             dM[i]/dt = m[i] - m[i+1]                       (10.12a)
-      energy[i]           dU[i]/dt = m[i] h_up - m[i+1] h_i - Q[i]
+      energy[i]           dU[i]/dt = E[i] - E[i+1] - Q[i],  E[j] = w(m[j]) h_left - w(-m[j]) h_right
       wall[i]             C_i dT_w[i]/dt = Q[i]                         (with energy: 10.12b,
                                                                          U_s = C_wall T_w)
                           or T_w[i] = T_wall(t) when T_wall is given (fixed wall)
                           or T_w[i] = T_i when C_wall = kA = 0 (adiabatic, no wall)
-      density[i]          M[i] = V_i rho(p_i, h_i)                       (10.12d)
-      internal_energy[i]  U[i] = M[i] (u_up + u_i)/2   (10.12c, "mean": default for n_volumes = 1)
-                          U[i] = M[i] u_i              ("outlet": default for n_volumes > 1,
-                                                        since chained "mean" volumes zig-zag)
-      heat[i]             Q[i] = kA_i LMTD(T_up - T_w[i], T_i - T_w[i])  (10.12e, "lmtd")
-                          (or kA_i (T_i - T_w[i]) "outlet", kA_i ((T_up + T_i)/2 - T_w[i]) "mean")
-      momentum[i]         p_up - p_i = k_i m[i] sqrt(m[i]^2 + m_reg^2)/rho_up + rho_up g dz/n
+      density[i]          M[i] = V_i rho(p_v[i], h_v[i])                 (10.12d)
+      internal_energy[i]  U[i] = M[i] u_i              ("outlet", mixed volume: default)
+                          U[i] = M[i] (u_a + u_i)/2    (10.12c, "mean": u_a = inflow state)
+      heat[i]             Q[i] = kA_i LMTD(T_a - T_w[i], T_i - T_w[i])  (10.12e, "lmtd")
+                          (or kA_i (T_i - T_w[i]) "outlet", kA_i ((T_a + T_i)/2 - T_w[i]) "mean")
+      momentum[i]         p_left - p_v[i] = k_i m[i] sqrt(m[i]^2 + m_reg^2)/rho_f + rho_f g dz/n
+      outlet_pressure     p_outlet = p_v[n-1]
+      heat_passed         dQ_passed/dt = sum_i Q[i]     (fixed wall only: heat to the wall [J])
 
-    "up" is the inlet node for volume 0, else volume i-1; the last volume's state is
-    the outlet node. m[0] is the inlet flow, m[n] the outlet flow. The LMTD is the
-    regularised form of ``dnasim.components.physics.lmtd`` (no log of a
-    non-positive number, equal to the plain difference when both ends agree).
+    m[0] is the inlet flow, m[n] the outlet flow (positive inlet -> outlet; either
+    sign allowed). Unknowns and equations: 7n + 1 (+1 with a fixed wall). The port
+    energy flows are E[0] (into the pipe at the inlet) and E[n] (out at the outlet).
     Friction sits at the inlet face of each volume, so a pipe's outlet is a storage
     volume: connect it to a pressure boundary or another storage volume only
-    through a flow resistance (e.g. a Valve), otherwise the DAE has index 2.
+    through a flow resistance (e.g. a Valve), otherwise the DAE has index 2. With
+    k = 0 the inlet is a storage volume too (``dnasim check`` names 'k').
+
+    Balances over a run: d(M_total)/dt = m[0] - m[n];
+    d(U_total + E_wall)/dt = E[0] - E[n] - (sum Q with a fixed wall: Q_passed).
 
     Given start (start="given"): the fluid starts at pressure p0 (default: the
     node guesses) and temperature T0, the wall at T_wall0 (default T0).
@@ -62,8 +69,8 @@ class Pipe(Component):
             "internal_energy",
             "1",
             None,
-            "U = M (u_in+u_out)/2 ('mean', seed) or U = M u_out ('outlet'); default: mean for one "
-            "volume, outlet for several",
+            "U = M u_out ('outlet': mixed volume, default) or U = M (u_in+u_out)/2 ('mean', "
+            "seed eq. 10.12c; jumps opposite to an inlet step)",
             kind="string",
             choices=("mean", "outlet"),
         ),
@@ -86,6 +93,13 @@ class Pipe(Component):
             "LMTD regularisation width (exact LMTD for differences >~ 10 dT_reg)",
             min=0.0,
         ),
+        Param(
+            "phase_switches",
+            "1",
+            False,
+            "locate crossings of the saturation lines per volume (condensable media)",
+            kind="bool",
+        ),
         Param("p0", "Pa", None, "initial fluid pressure (given start)", min=0.0),
         Param("T0", "K", None, "initial fluid temperature (given start)", min=0.0),
         Param("T_wall0", "K", None, "initial wall temperature (given start), default T0", min=0.0),
@@ -99,9 +113,7 @@ class Pipe(Component):
     )
     FLUID_PORTS = (
         FluidPort("inlet", "inlet", "m[0]", "resistance", "fluid in (friction at this face)"),
-        FluidPort(
-            "outlet", "outlet", None, "storage", "fluid out; its node is the last volume's state"
-        ),
+        FluidPort("outlet", "outlet", "m[n]", "storage", "fluid out; pressure = last volume's"),
     )
 
     def setup(self):
@@ -115,10 +127,9 @@ class Pipe(Component):
                 "T_wall (fixed wall)"
             )
         self.n = n
-        # "mean" chained over several volumes extrapolates each outlet state from its
-        # inlet (u_i = 2U/M - u_up): a step upstream makes the volumes zig-zag and
-        # the transient blows up; several volumes therefore default to "outlet".
-        self.internal_energy = P["internal_energy"] or ("mean" if n == 1 else "outlet")
+        # "mean" extrapolates each volume's state from its inflow (u_i = 2U/M - u_a):
+        # an inlet step moves the outlet the opposite way, chained volumes zig-zag.
+        self.internal_energy = P["internal_energy"] or "outlet"
         self.fixed_wall = P["T_wall"] is not None
         # kA = 0 and no wall capacity: adiabatic pipe, the wall variable just follows the fluid
         self.no_wall = not self.fixed_wall and P["C_wall"] == 0
@@ -141,10 +152,44 @@ class Pipe(Component):
         )
 
     def fluid_ports(self):
+        ch = self.channel
+        inlet_role = "storage" if ch.frictionless else "resistance"
         return [
-            FluidPort("inlet", "inlet", "m[0]", "resistance", "fluid in"),
-            FluidPort("outlet", "outlet", f"m[{self.n}]", "storage", "fluid out"),
+            FluidPort(
+                "inlet",
+                "inlet",
+                "m[0]",
+                inlet_role,
+                "fluid in",
+                h_out=ch.h_out_inlet(),
+                pressure_param="k",
+                m_eps=ch.m_eps,
+            ),
+            FluidPort(
+                "outlet",
+                "outlet",
+                f"m[{self.n}]",
+                "storage",
+                "fluid out",
+                h_out=ch.h_out_outlet(),
+                m_eps=ch.m_eps,
+            ),
         ]
+
+    def structure_problems(self):
+        if self.n > 1 and self.channel.frictionless:
+            return [
+                f"component '{self.name}' (Pipe): friction parameter 'k' = 0 with n_volumes = "
+                f"{self.n}: its {self.n} storage volumes are joined with no flow resistance "
+                "between them, so their pressures are set twice and the DAE has index 2. Give "
+                "k > 0."
+            ]
+        return []
+
+    def switches(self):
+        if self.params["phase_switches"] and is_condensable(self.medium):
+            return self.channel.switches(self.medium)
+        return []
 
     def variables(self):
         P = self.params
@@ -152,9 +197,20 @@ class Pipe(Component):
         M_nom = P["V"] / self.n * 1e-3
         U_nom = M_nom * 1e3
         Q_nom = max(P["kA"] / self.n * 10.0, 1.0)
-        return self.channel.variables(M_nom, U_nom, 1e5, 1e5, Q_nom) + [
+        out = self.channel.variables(M_nom, U_nom, 1e5, 1e5, Q_nom) + [
             Variable("T_w", "K", 300.0, self.n, "wall temperature of volume i"),
         ]
+        if self.fixed_wall:
+            out.append(
+                Variable(
+                    "Q_passed",
+                    "J",
+                    Q_nom,
+                    doc="heat from the fluid to the fixed wall, integral of sum Q dt",
+                    accumulator=True,
+                )
+            )
+        return out
 
     def equations(self):
         eqs = self.channel.equations()
@@ -163,7 +219,7 @@ class Pipe(Component):
             if self.fixed_wall:
                 eqs.append(Equation(f"wall[{i}]", y=(f"T_w[{i}]",), doc="T_w = T_wall(t)"))
             elif self.no_wall:
-                pi, hi = self.channel.p_name(i), self.channel.h_name(i)
+                pi, hi = self.channel.state_names(i + 1)
                 eqs.append(
                     Equation(f"wall[{i}]", y=(f"T_w[{i}]", pi, hi), doc="T_w = T (adiabatic)")
                 )
@@ -173,6 +229,15 @@ class Pipe(Component):
                         f"wall[{i}]", y=(f"Q[{i}]",), yp=(f"T_w[{i}]",), doc=f"{C_i:g} dT_w/dt = Q"
                     )
                 )
+        if self.fixed_wall:
+            eqs.append(
+                Equation(
+                    "heat_passed",
+                    y=tuple(f"Q[{i}]" for i in range(self.n)),
+                    yp=("Q_passed",),
+                    doc="dQ_passed/dt = sum Q",
+                )
+            )
         return eqs
 
     def residual(self, t, x, xp):
@@ -181,8 +246,9 @@ class Pipe(Component):
         blocks = self.channel.residual_blocks(x, xp, props, T_w)
         if self.fixed_wall:
             blocks.append(T_w - self.param_at("T_wall", t))
+            blocks.append([xp["Q_passed"] - np.sum(x["Q"])])
         elif self.no_wall:
-            blocks.append(T_w - props[2][1:])
+            blocks.append(T_w - props[2][1:-1])
         else:
             blocks.append(self.params["C_wall"] / self.n * xp["T_w"] - x["Q"])
         return np.concatenate(blocks)
@@ -195,19 +261,24 @@ class Pipe(Component):
             Output("U_total", "J", "fluid internal energy in the pipe"),
             Output("E_wall", "J", "wall energy C_wall T_w (reference 0 K)"),
             Output("Q_total", "W", "heat flow from fluid to wall"),
+            Output("E_in", "W", "energy flow into the pipe at the inlet"),
+            Output("E_out", "W", "energy flow out of the pipe at the outlet"),
         ] + [Output(f"T[{i}]", "K", f"fluid temperature of volume {i}") for i in range(self.n)]
 
     def output_values(self, t, x, xp):
-        _, _, T, _, _ = self.channel.evaluate(self.medium, x)
+        _, h, T, _, _ = self.channel.evaluate(self.medium, x)
+        E = self.channel.face_energy(x["m"], h)
         C_i = self.params["C_wall"] / self.n
         return [
             T[0],
-            T[-1],
+            T[-2],
             float(np.sum(x["M"])),
             float(np.sum(x["U"])),
             float(C_i * np.sum(x["T_w"])),
             float(np.sum(x["Q"])),
-            *T[1:],
+            float(E[0]),
+            float(E[-1]),
+            *T[1:-1],
         ]
 
     def guess_nodes(self, t0):
@@ -233,7 +304,8 @@ class Pipe(Component):
         T = self.channel.guess(x, self.medium, p, h, P["m_nominal"])
         if self.fixed_wall:
             x["T_w"] = self.param_at("T_wall", t0)
+            x["Q_passed"] = 0.0
         elif P["T_wall0"] is not None:
             x["T_w"] = P["T_wall0"]
         else:
-            x["T_w"] = T[1:]
+            x["T_w"] = T

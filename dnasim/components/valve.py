@@ -11,12 +11,27 @@ from dnasim.components.physics import valve_flow
 class Valve(Component):
     """Valve with opening z from the signal input ``z`` or the parameter ``opening``.
 
-      flow      m = C z (p_in - p_out) / ((p_in - p_out)^2 + dp_reg^2)^(1/4)
-                  (= C z sqrt(p_in - p_out) for p_in - p_out >> dp_reg; odd in the
+      flow      m = C z_e (p_in - p_out) / ((p_in - p_out)^2 + dp_reg^2)^(1/4)
+                  (= C z_e sqrt(p_in - p_out) for p_in - p_out >> dp_reg; odd in the
                   pressure difference, so reverse flow gives m < 0; finite slope at 0)
-      enthalpy  h_out = h_in     (isenthalpic throttling, design direction)
+      z_e       = leakage + (1 - leakage) z
 
-    The mass flow m [kg/s] is the same at both ports (no storage).
+    The mass flow m [kg/s] is the same at both ports (no storage). Throttling is
+    isenthalpic in both directions: fluid leaving through the outlet carries the
+    inlet node's enthalpy, fluid leaving through the inlet (reverse flow) the
+    outlet node's. The energy flows at the two ports cancel exactly.
+
+    The parameter ``opening`` must lie in [0, 1]. A signal input z is used as
+    given, not clipped: limit the driving controller's output to [0, 1]
+    (PIController z_min, z_max; its defaults). Clipping inside the valve was tried
+    and rejected: a flat clip makes the steady-state Jacobian singular as soon as
+    a Newton iterate leaves [0, 1] (dm/dz = 0), and a clip with a small residual
+    slope lets Newton find non-physical steady states (openings of several
+    hundred, spray lines running backwards). A closed valve (z = 0) passes the
+    leakage flow ``leakage`` C sqrt(dp): with the default 1e-6 it is a millionth
+    of the full-open flow, and dm/dp stays > 0, so that a node between the closed
+    valve and another volume-less component (a second valve, a mass-flow source)
+    still has an equation for its pressure and the plant stays index 1.
     """
 
     PARAMS = (
@@ -25,21 +40,42 @@ class Valve(Component):
             "opening",
             "1",
             None,
-            "fixed opening z (otherwise from the signal input 'z')",
+            "fixed opening z in [0, 1] (otherwise from the signal input 'z')",
+            min=0.0,
+            max=1.0,
             time_function=True,
+        ),
+        Param(
+            "leakage",
+            "1",
+            1e-6,
+            "flow coefficient of the closed valve, as a fraction of C",
+            min=0.0,
+            max=1.0,
         ),
         Param("dp_reg", "Pa", 10.0, "regularisation pressure difference near dp = 0", min=0.0),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
     )
     FLUID_PORTS = (
-        FluidPort("inlet", "inlet", "m", "resistance", "fluid in"),
-        FluidPort("outlet", "outlet", "m", "resistance", "fluid out"),
+        FluidPort("inlet", "inlet", "m", "resistance", "fluid in", h_out="outlet.h"),
+        FluidPort("outlet", "outlet", "m", "resistance", "fluid out", h_out="inlet.h"),
     )
     SIGNAL_INPUTS = (SignalPort("z", "1", "opening (when the parameter 'opening' is not given)"),)
 
     def setup(self):
         self.opening_from_signal = self.params["opening"] is None
+
+    def fluid_ports(self):
+        eps = self.m_eps
+        return [
+            FluidPort(
+                "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=eps
+            ),
+            FluidPort(
+                "outlet", "outlet", "m", "resistance", h_out="inlet.h", h_source=False, m_eps=eps
+            ),
+        ]
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.opening_from_signal else []
@@ -49,18 +85,19 @@ class Valve(Component):
 
     def equations(self):
         dep = ("m", "inlet.p", "outlet.p") + (("z",) if self.opening_from_signal else ())
-        return [Equation("flow", y=dep), Equation("enthalpy", y=("outlet.h", "inlet.h"))]
+        return [Equation("flow", y=dep)]
 
     def opening(self, t, x):
-        return x["z"] if self.opening_from_signal else self.param_at("opening", t)
+        z = x["z"] if self.opening_from_signal else self.param_at("opening", t)
+        leak = self.params["leakage"]
+        return leak + (1.0 - leak) * z
 
     def residual(self, t, x, xp):
         dp = x["inlet.p"] - x["outlet.p"]
         m = valve_flow(self.params["C"], self.opening(t, x), dp, self.params["dp_reg"])
-        return np.array([x["m"] - m, x["outlet.h"] - x["inlet.h"]])
+        return np.array([x["m"] - m])
 
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
         z = self.opening(t0, x) if not self.opening_from_signal else 0.5
         x["m"] = valve_flow(self.params["C"], z, dp, self.params["dp_reg"])
-        x["outlet.h"] = x["inlet.h"]

@@ -8,29 +8,44 @@
     air_real = get_medium("Air", backend="HEOS")  # CoolProp's real-gas air
     r134a = get_medium("R134a", backend="HEOS")   # any CoolProp fluid
     st = water.state(1e5, 4.2e5)                  # -> FluidState (cached)
+    sts = water.states(p_array, h_array)          # -> FluidStates (arrays, one call)
+    water.saturation_enthalpies(p_array)          # -> (h_liq, h_vap) arrays
+    water.h_px(p_array, x_array)                  # saturated mixture h
     st.T, st.rho, st.u, st.s, st.cp, st.quality, st.drho_dp_h, st.drho_dh_p
     water.h_pT(1e5, 350.0)                        # -> h [J/kg]
 
 Every failure to evaluate a state is a :class:`PropertyError` (a
 :class:`dnasim.errors.ResidualDomainError`) that names the fluid, p, h and the
-property. Modules: ``state`` (FluidState), ``errors`` (PropertyError),
-``base`` (Medium and its cache), ``if97`` (water by IF97), ``coolprop_medium``
+property. CoolProp is imported only when a CoolProp medium is requested.
+Modules: ``state`` (FluidState, FluidStates), ``errors`` (PropertyError),
+``base`` (Medium and its cache), ``if97`` (water by IF97, on ``if97_kernel``,
+the vectorised IAPWS-IF97 kernel, with ``if97_coefficients``), ``coolprop_medium``
 (HEOS and tabular CoolProp backends), ``ideal_gas`` (IdealGas), ``registry``
 (get_medium and fluid names).
 """
 
 from dnasim.media.base import Medium
-from dnasim.media.coolprop_medium import CoolPropMedium
 from dnasim.media.errors import PropertyError
 from dnasim.media.ideal_gas import IdealGas
 from dnasim.media.if97 import IF97Water
 from dnasim.media.registry import BACKENDS, canonical_fluid_name, get_medium
-from dnasim.media.state import FluidState
+from dnasim.media.state import FluidState, FluidStates
+
+
+def __getattr__(name: str):
+    # CoolProp is imported only when a CoolProp medium is asked for (it takes seconds)
+    if name == "CoolPropMedium":
+        from dnasim.media.coolprop_medium import CoolPropMedium
+
+        return CoolPropMedium
+    raise AttributeError(f"module 'dnasim.media' has no attribute {name!r}")
+
 
 __all__ = [
     "BACKENDS",
     "CoolPropMedium",
     "FluidState",
+    "FluidStates",
     "IF97Water",
     "IdealGas",
     "Medium",

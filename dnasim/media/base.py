@@ -13,8 +13,10 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 
+import numpy as np
+
 from dnasim.media.errors import PropertyError
-from dnasim.media.state import FluidState
+from dnasim.media.state import FluidState, FluidStates
 
 _INF = math.inf
 
@@ -56,6 +58,9 @@ class Medium(ABC):
 
     name: str
     backend: str
+    #: True for media with a two-phase region (they implement
+    #: :meth:`saturation_enthalpies` and :meth:`h_px`).
+    condensable: bool = False
 
     def __init__(self, name: str, backend: str, *, cache_size: int = 4096) -> None:
         self.name = name
@@ -87,14 +92,107 @@ class Medium(ABC):
             return st
         return self._state_miss(p, h)
 
+    def states(self, p, h, *, check: bool = True) -> FluidStates:
+        """All properties at arrays of pressure ``p`` [Pa] and specific enthalpy ``h`` [J/kg].
+
+        ``p`` and ``h`` are broadcast against each other; every field of the returned
+        :class:`FluidStates` has their broadcast shape. Not cached (one call is meant to
+        cover all points of a plant that use this medium).
+
+        With ``check=True`` (default) the first state that cannot be evaluated raises
+        :class:`PropertyError` (as :meth:`state` would); with ``check=False`` such
+        states get ``ok = False`` and NaN fields, and no exception is raised.
+
+        This base implementation calls :meth:`state` for each point (CoolProp media);
+        IF97 water and the ideal gas override it with array code.
+        """
+        p, h = _as_arrays(p, h)
+        n = p.size
+        out = {k: np.full(n, np.nan) for k in _ARRAY_FIELDS}
+        region = np.zeros(n, dtype=np.int8)
+        ok = np.ones(n, dtype=bool)
+        pf, hf = p.ravel(), h.ravel()
+        for i in range(n):
+            try:
+                st = self.state(float(pf[i]), float(hf[i]))
+            except PropertyError:
+                if check:
+                    raise
+                ok[i] = False
+                continue
+            out["T"][i] = st.T
+            out["rho"][i] = st.rho
+            out["u"][i] = st.u
+            out["s"][i] = st.s
+            out["cp"][i] = st.cp
+            out["drho_dp_h"][i] = st.drho_dp_h
+            out["drho_dh_p"][i] = st.drho_dh_p
+            if st.quality >= 0.0:
+                out["x"][i] = st.quality
+                region[i] = 4
+        shape = p.shape
+        return FluidStates(
+            p,
+            h,
+            *(out[k].reshape(shape) for k in _ARRAY_FIELDS),
+            region.reshape(shape),
+            ok.reshape(shape),
+        )
+
+    def saturation_enthalpies(self, p):
+        """(h_liq, h_vap) [J/kg]: saturated liquid and vapour enthalpy at pressures ``p`` [Pa].
+
+        Arrays of the shape of ``p``; NaN at and above the critical pressure. Only for
+        ``condensable`` media; others raise :class:`PropertyError`.
+        """
+        raise PropertyError(
+            self.label, _first(p), math.nan, "saturation_enthalpies", "no two-phase region"
+        )
+
+    def h_px(self, p, x):
+        """Specific enthalpy [J/kg] of the saturated mixture at pressures ``p`` [Pa] and
+        vapour qualities ``x`` [-] in [0, 1] (arrays, broadcast): h_liq + x (h_vap - h_liq).
+
+        Raises :class:`PropertyError` for a quality outside [0, 1], a pressure at or
+        above the critical pressure (or outside the backend's saturation range), and
+        for media without a two-phase region.
+        """
+        p, x = _as_arrays(p, x)
+        if not self.condensable:
+            raise PropertyError(self.label, _first(p), math.nan, "h_px", "no two-phase region")
+        bad = ~((x >= 0.0) & (x <= 1.0))
+        if bad.any():
+            i = int(np.flatnonzero(bad.ravel())[0])
+            raise PropertyError(
+                self.label,
+                float(p.flat[i]),
+                math.nan,
+                "h_px",
+                f"quality {float(x.flat[i])!r} not in [0, 1]",
+            )
+        hl, hv = self.saturation_enthalpies(p)
+        bad = ~np.isfinite(hl + hv)
+        if bad.any():
+            i = int(np.flatnonzero(bad.ravel())[0])
+            raise PropertyError(
+                self.label,
+                float(p.flat[i]),
+                math.nan,
+                "h_px",
+                "no saturated state at this pressure (at or above the critical pressure, "
+                "or outside the saturation range of the backend)",
+            )
+        return hl + x * (hv - hl)
+
     def h_pT(self, p: float, T: float) -> float:
         """Return the specific enthalpy h [J/kg] at pressure ``p`` [Pa] and temperature ``T`` [K].
 
         Single-phase states only: (p, T) does not fix a state inside the
-        two-phase dome, so a ``T`` at the saturation temperature of ``p``
-        raises :class:`PropertyError` (see the backend's docstring for the
-        exact band); use :meth:`h_pQ` for saturated states. Cached like
-        :meth:`state`.
+        two-phase dome, so a ``T`` within 1e-6 K of the saturation temperature of
+        ``p`` raises :class:`PropertyError` ("T = 342.16 °C is the saturation
+        temperature at 150 bar: the state is not defined by p and T; give h or the
+        quality"; the caller adds its component name); use :meth:`h_pQ` or
+        :meth:`h_px` for saturated states. Cached like :meth:`state`.
         """
         hv = self._cache_hpT.get((p, T))
         if hv is not None:
@@ -179,20 +277,12 @@ class Medium(ABC):
         return st
 
     def _refuse_saturated(self, p: float, T: float, T_sat: float) -> None:
-        """Raise PropertyError when T is (within 1e-6 K) the saturation temperature of p.
+        """Raise PropertyError when T is (within ``T_SAT_BAND`` = 1e-6 K) T_sat(p).
 
         There h is not fixed by (p, T): any point of the two-phase dome has it.
         """
-        if abs(T - T_sat) <= 1e-6:
-            raise PropertyError(
-                self.label,
-                p,
-                math.nan,
-                "h_pT",
-                f"T is the saturation temperature {T_sat:.9g} K of p: h is not fixed "
-                "by (p, T) inside the two-phase dome; use h_pQ",
-                T=T,
-            )
+        if abs(T - T_sat) <= T_SAT_BAND:
+            raise PropertyError(self.label, p, math.nan, "h_pT", saturation_message(p, T), T=T)
 
     @abstractmethod
     def _compute_state(self, p: float, h: float) -> FluidState:
@@ -207,6 +297,29 @@ class Medium(ABC):
 
     def _compute_h_pQ(self, p: float, x: float) -> float:
         raise PropertyError(self.label, p, math.nan, "h_pQ", "this medium has no two-phase region")
+
+
+#: [K] a T this close to T_sat(p) is "at saturation" for h_pT
+T_SAT_BAND = 1e-6
+
+_ARRAY_FIELDS = ("T", "rho", "u", "s", "cp", "x", "drho_dp_h", "drho_dh_p")
+
+
+def saturation_message(p: float, T: float) -> str:
+    """ "T = 342.16 °C is the saturation temperature at 150 bar: ..." for h_pT errors."""
+    return (
+        f"T = {T - 273.15:.6g} °C is the saturation temperature at {p / 1e5:.6g} bar: the "
+        "state is not defined by p and T; give h or the quality"
+    )
+
+
+def _as_arrays(a, b):
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    return a.copy(), b.copy()
+
+
+def _first(p) -> float:
+    return float(np.ravel(np.asarray(p, dtype=float))[0]) if np.size(p) else math.nan
 
 
 def _check_outputs(label: str, st: FluidState) -> None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 import CoolProp.CoolProp as CP
+import numpy as np
 
 from dnasim.media.base import BACKEND_ERRORS, Medium
 from dnasim.media.errors import PropertyError
@@ -74,6 +75,30 @@ class CoolPropMedium(Medium):
         except BACKEND_ERRORS:  # pseudo-pure fluids without a true critical point
             self.p_critical = math.nan
             self.T_critical = math.nan
+        #: a fluid with a critical point has a two-phase region below it
+        self.condensable = math.isfinite(self.p_critical)
+
+    def saturation_enthalpies(self, p):
+        """(h_liq, h_vap) [J/kg] at pressures p [Pa] (arrays of the shape of p), by the
+        backend's (p, Q) flash; NaN at and above the critical pressure or where the
+        backend has no saturated state."""
+        if not self.condensable:
+            return super().saturation_enthalpies(p)
+        p = np.asarray(p, dtype=float)
+        hl = np.full(p.shape, np.nan)
+        hv = np.full(p.shape, np.nan)
+        AS = self._AS
+        for i, pi in enumerate(p.flat):
+            if not (0.0 < pi < self.p_critical):
+                continue
+            try:
+                AS.update(_PQ, pi, 0.0)
+                hl.flat[i] = AS.hmass()
+                AS.update(_PQ, pi, 1.0)
+                hv.flat[i] = AS.hmass()
+            except BACKEND_ERRORS:
+                hl.flat[i] = hv.flat[i] = np.nan
+        return hl, hv
 
     def _compute_state(self, p: float, h: float) -> FluidState:
         AS = self._AS

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from dnasim.errors import PlantError
-from dnasim.media.base import Medium
+from dnasim.media.base import Medium, _as_arrays
 from dnasim.media.errors import PropertyError
-from dnasim.media.state import FluidState
+from dnasim.media.state import FluidState, FluidStates
 
 _log = math.log
 
@@ -112,6 +114,50 @@ class IdealGas(Medium):
             -1.0,
             1.0 / (R * T),
             -rho / (cp * T),
+        )
+
+    def states(self, p, h, *, check: bool = True) -> FluidStates:
+        """Vectorised :meth:`state` (the closed forms above on arrays, numpy).
+
+        A state with p not finite and > 0, h not finite, or T <= 0 K raises
+        :class:`PropertyError` (``check=True``) or gets ``ok = False`` and NaN fields.
+        """
+        p, h = _as_arrays(p, h)
+        cp = self.cp
+        R = self.R
+        T = self.T_ref + h / cp
+        ok = (p > 0.0) & (p < math.inf) & np.isfinite(h) & (T > 0.0)
+        if not ok.all():
+            if check:
+                i = int(np.flatnonzero(~ok.ravel())[0])
+                pi, hi, Ti = float(p.flat[i]), float(h.flat[i]), float(T.flat[i])
+                reason = (
+                    "pressure must be finite and > 0"
+                    if not (0.0 < pi < math.inf)
+                    else "enthalpy must be finite"
+                    if not math.isfinite(hi)
+                    else f"temperature T = {Ti} K is not positive"
+                )
+                raise PropertyError(self.label, pi, hi, "state", reason)
+            T = np.where(ok, T, np.nan)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rho = p / (R * T)
+            s = cp * np.log(T / self.T_ref) - R * np.log(p / self.p_ref)
+        self.n_evaluations += p.size
+        nan = np.full(p.shape, np.nan)
+        return FluidStates(
+            p,
+            h,
+            T,
+            rho,
+            h - p / rho,
+            s,
+            np.where(ok, cp, np.nan),
+            nan,
+            1.0 / (R * T),
+            -rho / (cp * T),
+            np.zeros(p.shape, dtype=np.int8),
+            ok,
         )
 
     def _compute_h_pT(self, p: float, T: float) -> float:

@@ -332,8 +332,11 @@ def region5(p, T):
 
 
 # --------------------------------------------------------------- region 3
-def region3_rhoT(rho, T):
-    """Region 3 at (rho [kg/m3], T [K]): (p [Pa], (dp/drho)_T, record (7, N) at (p, T))."""
+def region3_rhoT(rho, T, full=False):
+    """Region 3 at (rho [kg/m3], T [K]): (p [Pa], (dp/drho)_T, record (7, N) at (p, T)).
+
+    With ``full``, also ((dp/dT)_rho, (dh/drho)_T, (dh/dT)_rho) as a fourth item.
+    """
     delta = rho / RHO_C
     tau = T_C / T
     S = _sums(delta, tau, _R3)
@@ -361,6 +364,8 @@ def region3_rhoT(rho, T):
     rec[_VP] = -rho_p * v * v
     rec[_HT] = h_Tr + h_r * rho_T
     rec[_HP] = h_r * rho_p
+    if full:
+        return p, p_r, rec, (p_T, h_r, h_Tr)
     return p, p_r, rec
 
 
@@ -452,12 +457,17 @@ def _blend(A, B, w, w_T, w_p):
     return out
 
 
-def _root_side(p, T, liquid_formula):
-    """Branch of the region-3 density: +1 liquid, -1 vapour, 0 for T >= T_c."""
+def _root_side(p, T, liquid_formula, rho_guess):
+    """Branch of the region-3 density: +1 liquid, -1 vapour, 0 for T >= T_c (one root).
+
+    Below p_c the phase decides. At p >= p_c and T < T_c the isotherm of the region-3
+    equation is monotone except within a few Pa of p_c (its critical point and the
+    region-4 T_sat(p_c) differ slightly); there the branch follows the starting density.
+    """
     below = T < T_C
-    return np.where(below & (liquid_formula | (p >= P_C)), 1, np.where(below, -1, 0)).astype(
-        np.int8
-    )
+    sup = p >= P_C
+    liq = np.where(sup, ~(rho_guess < RHO_C), liquid_formula)
+    return np.where(below, np.where(liq, 1, -1), 0).astype(np.int8)
 
 
 def _eval(p, T, liquid_formula, rho3):
@@ -511,7 +521,7 @@ def _eval(p, T, liquid_formula, rho3):
         v2 = np.where(nb2, r2[_V, need3], 1.0)
         start = np.where(~np.isfinite(start) & nb1, 1.0 / v1, start)
         start = np.where(~np.isfinite(start) & nb2, 1.0 / v2, start)
-        side = _root_side(p[need3], T[need3], L[need3])
+        side = _root_side(p[need3], T[need3], L[need3], start)
         rr, rec3, ok3 = _rho3_solve(p[need3], T[need3], start, side)
         rho3[need3] = rr
         r3[:, need3] = rec3
@@ -764,6 +774,9 @@ def ph(p, h) -> PhResult:
         hL = recL[_H]
         hV = recV[_H]
         k = np.where(hs < hL, 1, np.where(hs > hV, -1, 4)).astype(np.int8)
+        # within about 1 Pa of p_c the region-3 saturated states cross (h' >= h''): the
+        # dome has closed there, the state is treated as supercritical
+        k[~(hV > hL)] = 0
         kind[sub] = k
         Thi[sub] = np.where(k == 1, Ts, Thi[sub])
         Tlo[sub] = np.where(k == -1, Ts, Tlo[sub])
@@ -814,6 +827,42 @@ def _fill_two_phase(r, ix, p, h, Ts, dTs, recL, recV):
     r.region[ix] = 4
 
 
+def _solve_region3(p, h, rho, T):
+    """Newton's method on (rho, T) for p3(rho, T) = p, h3(rho, T) = h (pure region 3).
+
+    Well conditioned up to the critical point, where (dp/drho)_T = 0 makes rho(p, T)
+    ill-conditioned. Steps are limited to 20 % in rho and 10 K in T. Returns
+    (T, record, region-3 density, converged mask).
+    """
+    n = p.size
+    rec = np.empty((7, n))
+    conv = np.zeros(n, dtype=bool)
+    rho = rho.copy()
+    T = T.copy()
+    idx = np.arange(n)
+    tol_h = 2e-14 * np.abs(h) + 1e-9
+    for it in range(30):
+        pp, pr, rc, (pT_, hr, hT) = region3_rhoT(rho[idx], T[idx], full=True)
+        rec[:, idx] = rc
+        fp = pp - p[idx]
+        fh = rc[_H] - h[idx]
+        det = pr * hT - pT_ * hr
+        dr = (-fp * hT + pT_ * fh) / det
+        dT = (-fh * pr + hr * fp) / det
+        rt = 2e-14 if it < 6 else 1e-12
+        small = (np.abs(dr) <= rt * rho[idx]) & (np.abs(dT) <= rt * T[idx])
+        fin = ((np.abs(fp) <= 2e-13 * p[idx]) & (np.abs(fh) <= tol_h[idx])) | small
+        conv[idx[fin]] = True
+        keep = ~fin & np.isfinite(dr) & np.isfinite(dT)
+        idx, dr, dT = idx[keep], dr[keep], dT[keep]
+        if idx.size == 0:
+            break
+        lim = 0.2 * rho[idx]
+        rho[idx] = np.clip(rho[idx] + np.clip(dr, -lim, lim), 1.0, RHO3_MAX)
+        T[idx] = T[idx] + np.clip(dT, -10.0, 10.0)
+    return T, rec, rho, conv
+
+
 def _solve_single(r, ix, p, h, kind, lo, hi):
     """Safeguarded Newton for T on the blended h(p, T) = h; fills r at ix."""
     n = p.size
@@ -834,8 +883,24 @@ def _solve_single(r, ix, p, h, kind, lo, hi):
         r.status[ix[q[above]]] = 5
     T = np.clip(np.where(np.isfinite(T0), T0, 0.5 * (lo + hi)), lo, hi)
     rho3 = rho0
-    act = np.flatnonzero(r.status[ix] == 0)
     done = np.zeros(n, dtype=bool)
+    # pure region 3 (started from the SR3-03 backward equations): Newton on (rho, T)
+    q = np.flatnonzero(
+        (r.status[ix] == 0)
+        & np.isfinite(rho0)
+        & (T0 > T_13 + BAND_13 + 1.0)
+        & (T0 < T_b23(p) - BAND_23 - 1.0)
+    )
+    if q.size:
+        T3, rec3, rr3, ok3 = _solve_region3(p[q], h[q], rho0[q], T0[q])
+        inside = ok3 & (T3 >= T_13 + BAND_13) & (T3 <= T_b23(p[q]) - BAND_23)
+        inside &= (T3 >= lo[q]) & (T3 <= hi[q])
+        if inside.any():
+            qi = q[inside]
+            reg3 = np.full(qi.size, 3, dtype=np.int8)
+            _fill_single(r, ix[qi], p[qi], h[qi], T3[inside], rec3[:, inside], reg3)
+            done[qi] = True
+    act = np.flatnonzero((r.status[ix] == 0) & ~done)
     dT_old = np.full(n, np.inf)
     tol = 2e-14 * np.abs(h) + 1e-9
     for it in range(60):

@@ -5,8 +5,6 @@ from __future__ import annotations
 import difflib
 import re
 
-import CoolProp.CoolProp as CP
-
 from dnasim.errors import PlantError
 from dnasim.media.base import BACKEND_ERRORS, Medium
 
@@ -20,6 +18,10 @@ _NAMES: dict[str, str] | None = None  # normalised spelling -> canonical CoolPro
 _FLUIDS: list[str] = []
 
 
+#: spellings answered without importing CoolProp (CoolProp's own aliases of these fluids)
+_COMMON_NAMES = {"water": "Water", "h2o": "Water", "r718": "Water", "air": "Air"}
+
+
 def _norm(name: str) -> str:
     return re.sub(r"[\s\-_]", "", name).lower()
 
@@ -28,6 +30,8 @@ def _name_table() -> dict[str, str]:
     """Normalised spellings (names and aliases) -> canonical CoolProp names, built once."""
     global _NAMES
     if _NAMES is None:
+        import CoolProp.CoolProp as CP  # lazily: importing CoolProp takes seconds
+
         fluids = [f for f in CP.get_global_param_string("FluidsList").split(",") if f]
         table: dict[str, str] = {}
         ambiguous: set[str] = set()
@@ -63,8 +67,11 @@ def canonical_fluid_name(fluid: str) -> str:
     dnasim.errors.PlantError
         For an unknown name, with close matches and the way to list all names.
     """
-    table = _name_table()
     key = _norm(fluid)
+    common = _COMMON_NAMES.get(key)
+    if common is not None:
+        return common
+    table = _name_table()
     if key in table:
         return table[key]
     close = difflib.get_close_matches(key, list(table), n=5, cutoff=0.6)
