@@ -298,8 +298,9 @@ def pipe_states(df: pd.DataFrame, pipe: str, outlet_node: str, row: int):
     """Pressure [Pa] and enthalpy [J/kg] of each volume of ``pipe`` in row ``row``."""
     p = [float(df[c].iloc[row]) for c in cols(df, rf"{pipe}\.p_v\[\d+\]")]
     h = [float(df[c].iloc[row]) for c in cols(df, rf"{pipe}\.h_v\[\d+\]")]
-    p.append(float(df[f"{outlet_node}.p"].iloc[row]))
-    h.append(float(df[f"{outlet_node}.h"].iloc[row]))
+    if len(p) < len(cols(df, rf"{pipe}\.T\[\d+\]")):  # the last volume's state is the node's
+        p.append(float(df[f"{outlet_node}.p"].iloc[row]))
+        h.append(float(df[f"{outlet_node}.h"].iloc[row]))
     return np.array(p), np.array(h)
 
 
