@@ -80,6 +80,17 @@ class PlantResults:
                 e["switch"] = ev.switch.name
                 e.setdefault("name", ev.name)
             log.append(e)
+        success, message = bool(res.success), str(res.message)
+        # a terminal switch that stands for a modelling error (e.g. flow into the
+        # plant through a sink-only boundary) ends the run as a failure with the
+        # component's own plain message
+        for e in reversed(log if getattr(res, "status", 1) == 1 else []):
+            idx = e.get("event")
+            if e.get("terminal") and idx is not None and 0 <= idx < len(dae.events):
+                text = dae.events[idx].message(e["t"])
+                if text:
+                    success, message = False, text
+                break
         return cls(
             t,
             names,
@@ -91,8 +102,8 @@ class PlantResults:
             stats,
             np.asarray(res.step_history),
             log,
-            bool(res.success),
-            str(res.message),
+            success,
+            message,
             getattr(res, "sol", None),
         )
 

@@ -6,6 +6,7 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Param, SignalPort, Variable
 from dnasim.components.physics import (
+    M_REG_REL,
     PropertyArrays,
     energy_in,
     friction_dp,
@@ -44,7 +45,7 @@ class Attemperator(Component):
         Param("k", "1/m4", doc="friction coefficient of the steam inlet: dp = k m|m|/rho", min=0.0),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param(
-            "m_reg", "kg/s", None, "friction regularisation flow (default 1e-4 m_nominal)", min=0.0
+            "m_reg", "kg/s", None, "friction regularisation flow (default 1e-2 m_nominal)", min=0.0
         ),
         Param("p0", "Pa", None, "initial pressure (given start)", min=0.0),
         Param("T0", "K", None, "initial temperature (given start)", min=0.0),
@@ -63,7 +64,7 @@ class Attemperator(Component):
 
     def setup(self):
         mn = self.params["m_nominal"]
-        self.m_reg = self.params["m_reg"] if self.params["m_reg"] is not None else 1e-4 * mn
+        self.m_reg = self.params["m_reg"] if self.params["m_reg"] is not None else M_REG_REL * mn
         self._props = PropertyArrays()
 
     def fluid_ports(self):

@@ -32,10 +32,14 @@ Per volume, with V_i = V/n, kA_i = kA/n, k_i = k/n, dz_i = dz/n:
     momentum[i]         p(S_i) - p_v[i] = dp_f(m[i], rho_f) + rho_f g dz_i      (face i)
     outlet_pressure     p(S_{n+1}) = p_v[n-1]
 
-where w is the smooth upwind weight (``physics.upwind_weight``, flow scale
-m_eps), x_a = (w(m[i]) x(S_i) + w(-m[i+1]) x(S_{i+2})) / (w(m[i]) + w(-m[i+1]))
+where w is the smooth upwind weight (``physics.upwind_weight``, regularised for
+|m| < m_eps = 1e-3 m_nominal, exact outside), and
+x_a = (a x(S_i) + b x(S_{i+2}) + c x_i) / (a + b + c), a = w(m[i]), b = w(-m[i+1]),
 is the state flowing into volume i (from the left in forward flow, from the
-right in reverse flow), and rho_f = ``physics.upwind_mean`` of the densities on
+right in reverse flow); c = ``physics.blend_to_own``(a, b) is zero when the
+inflow a + b >= m_eps and blends x_a into the volume's own state x_i as the
+inflow vanishes (a stagnant or emptying volume exchanges heat at its own
+temperature). rho_f = ``physics.upwind_mean`` of the densities on
 the two sides of the face. The friction law dp_f is k_i m sqrt(m^2 + m_reg^2)/rho
 (``physics.friction_dp``) or, when a nominal pressure drop is given instead of
 k, dp_nominal/n m sqrt(m^2 + m_reg^2)/m_nominal^2.
@@ -63,6 +67,7 @@ from dnasim.components.physics import (
     M_EPS_REL,
     G,
     PropertyArrays,
+    blend_to_own,
     friction_dp,
     lmtd,
     saturation_enthalpies,
@@ -211,10 +216,11 @@ class Channel:
         density = M - self.V_i * rho[1:-1]
         a, b = self.inflow_weights(m)
         if self.mean or self.heat_transfer != "outlet":
-            s = a + b
-            T_a = (a * T[:-2] + b * T[2:]) / s
+            c = blend_to_own(a, b, self.m_eps)
+            s = a + b + c
+            T_a = (a * T[:-2] + b * T[2:] + c * T[1:-1]) / s
         if self.mean:
-            u_a = (a * u[:-2] + b * u[2:]) / s
+            u_a = (a * u[:-2] + b * u[2:] + c * u[1:-1]) / s
             internal = U - M * 0.5 * (u_a + u[1:-1])
         else:
             internal = U - M * u[1:-1]
@@ -278,7 +284,8 @@ class Channel:
         _, _, T, rho, u = self.evaluate(medium, x)
         x[self.m] = m_guess
         a, b = self.inflow_weights(np.full(self.n + 1, float(m_guess)))
-        u_a = (a * u[:-2] + b * u[2:]) / (a + b)
+        c = blend_to_own(a, b, self.m_eps)
+        u_a = (a * u[:-2] + b * u[2:] + c * u[1:-1]) / (a + b + c)
         x[self.M] = self.V_i * rho[1:-1]
         x[self.U] = self.V_i * rho[1:-1] * (0.5 * (u_a + u[1:-1]) if self.mean else u[1:-1])
         x[self.Q] = 0.0

@@ -6,7 +6,7 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
-from dnasim.components.physics import is_condensable
+from dnasim.components.physics import M_REG_REL, is_condensable
 from dnasim.errors import PlantError
 
 
@@ -103,7 +103,7 @@ class HeatExchanger(Component):
                 dz=0.0,
                 kA=P[f"{side}_kA"],
                 m_nominal=P["m_nominal"],
-                m_reg=1e-4 * P["m_nominal"],
+                m_reg=M_REG_REL * P["m_nominal"],
                 dT_reg=P["dT_reg"],
                 internal_energy="outlet",
                 wall=wall,

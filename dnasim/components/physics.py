@@ -119,6 +119,18 @@ def lmtd(dT_a, dT_b, dT_reg):
     return logarithmic_mean(a_pos, b_pos) - logarithmic_mean(a_neg, b_neg)
 
 
+#: default friction regularisation flow m_reg = M_REG_REL * m_nominal. Below m_reg
+#: the friction law turns linear (laminar-like). It must not be much smaller: at
+#: zero flow the slope d(dp)/dm = k m_reg/rho is all that ties a face's flow to
+#: the pressures, and pressures are resolved only to about rtol * p; with 1e-4
+#: m_nominal (the former default) a steam pipe's face flows were undetermined by
+#: tens of kg/s at a flow reversal and Newton failed. ThermoPower uses the same
+#: order (its "wnf", fraction of nominal flow where linear friction equals
+#: turbulent friction, 0.01 to 0.02). At m_nominal the law differs from
+#: k m|m|/rho by (m_reg/m)^2/2 = 5e-5.
+M_REG_REL = 1e-2
+
+
 def friction_dp(k, m, rho, m_reg):
     """Friction pressure drop k m sqrt(m^2 + m_reg^2) / rho [Pa].
 
@@ -139,24 +151,43 @@ def valve_flow(C, z, dp, dp_reg):
     return C * z * dp / (dp * dp + dp_reg * dp_reg) ** 0.25
 
 
-#: m_eps = M_EPS_REL * m_nominal: the flow scale of the smooth upwind weight. At
-#: |m| = m_nominal the weight of the downstream side is (m_eps/2)^2/m_nominal =
-#: 2.5e-13 of the upstream one, far below any tolerance; at zero flow both sides
-#: weigh m_eps/2, so states stay defined and the Jacobian regular.
-M_EPS_REL = 1e-6
+#: m_eps = M_EPS_REL * m_nominal: the half-width of the flow band in which the
+#: upwind weight is regularised (``upwind_weight``). Outside the band, |m| >= m_eps,
+#: upwinding is exact: a forward flow of 1e-3 m_nominal or more carries exactly the
+#: upstream enthalpy, so steady closed forms hold to round-off. Inside it, both
+#: sides weigh in, and at zero flow states stay defined and the Jacobian regular.
+#: Why not smaller: a node's mixed enthalpy switches from one side's value to the
+#: other's across the band; when the band is much narrower than the flow changes a
+#: Newton iteration makes (1e-6 m_nominal was tried), the node enthalpy cannot
+#: converge there and flow reversals stop the run (measured on an air pipe whose
+#: back pressure is ramped above the inlet pressure).
+M_EPS_REL = 1e-3
 
 
 def upwind_weight(m, eps):
-    """w(m) = (m + sqrt(m^2 + eps^2))/2 [kg/s]: a smooth max(m, 0).
+    """A C1 smooth max(m, 0) [kg/s] with a regularisation band |m| < eps:
 
-    w(m) - w(-m) = m exactly (in real arithmetic), w(0) = eps/2 > 0, and
-    w(m) > 0 for all m. For m < 0 it is evaluated as eps^2 / (2 (sqrt(m^2 + eps^2) - m)),
-    the same value without the cancellation of m + sqrt(...)."""
+        w(m) = m                      for m >= eps
+             = (m + eps)^2 / (4 eps)  for |m| < eps
+             = 0                      for m <= -eps
+
+    w(m) = (m + q(m))/2 with q even (q = |m| outside the band, (m^2 + eps^2)/(2 eps)
+    inside), so w(m) - w(-m) = m exactly; w(0) = eps/4 > 0, w >= 0. At a node, the
+    flows into it sum to zero, so some port has w > 0 and the mixed enthalpy is
+    always defined."""
     m = np.asarray(m, dtype=float)
-    s = np.sqrt(m * m + eps * eps)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        neg = eps * eps / (2.0 * (s - m))
-    return np.where(m >= 0, 0.5 * (m + s), neg)
+    inner = (m + eps) ** 2 / (4.0 * eps)
+    return np.where(m >= eps, m, np.where(m <= -eps, 0.0, inner))
+
+
+def blend_to_own(a, b, eps):
+    """Weight c >= 0 of a volume's own state in its inflow state [kg/s]: with
+    s = a + b the sum of the inflow weights, c = (eps - s)^2/eps for s < eps, else 0.
+    The inflow state (a x_left + b x_right + c x_own)/(s + c) is the exact upwind
+    value when the inflow s >= eps, turns smoothly (C1) into the volume's own state
+    as the inflow vanishes, and s + c >= 3 eps/4 > 0."""
+    s = np.asarray(a, dtype=float) + np.asarray(b, dtype=float)
+    return np.where(s < eps, (eps - s) ** 2 / eps, 0.0)
 
 
 def energy_in(m, h_node, h_own, eps):
@@ -169,14 +200,15 @@ def energy_in(m, h_node, h_own, eps):
     (its ``h_out``). For m >> eps this is m h_node, for m << -eps it is m h_own.
     Every component computes its port energy flows with this one function; with
     the node's mixing equation this makes energy conservation across a node exact
-    (proof in ``dnasim.assembly``)."""
+    (proof in ``dnasim.assembly``). Exactly m h_node for m >= eps, m h_own for
+    m <= -eps."""
     return upwind_weight(m, eps) * h_node - upwind_weight(-np.asarray(m, dtype=float), eps) * h_own
 
 
 def upwind_mean(m, a, b, eps):
     """Smooth upwind value of a quantity across a face [unit of a]:
     (w(m) a + w(-m) b) / (w(m) + w(-m)); a is the value on the side m > 0 comes
-    from (e.g. a density). Equals a for m >> eps, b for m << -eps, (a + b)/2 at 0."""
+    from (e.g. a density). Equals a for m >= eps, b for m <= -eps, (a + b)/2 at 0."""
     wp = upwind_weight(m, eps)
     wm = upwind_weight(-np.asarray(m, dtype=float), eps)
     return (wp * a + wm * b) / (wp + wm)

@@ -7,7 +7,7 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
-from dnasim.components.physics import is_condensable
+from dnasim.components.physics import M_REG_REL, is_condensable
 from dnasim.errors import PlantError
 
 
@@ -84,7 +84,7 @@ class Pipe(Component):
         ),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param(
-            "m_reg", "kg/s", None, "friction regularisation flow (default 1e-4 m_nominal)", min=0.0
+            "m_reg", "kg/s", None, "friction regularisation flow (default 1e-2 m_nominal)", min=0.0
         ),
         Param(
             "dT_reg",
@@ -133,7 +133,7 @@ class Pipe(Component):
         self.fixed_wall = P["T_wall"] is not None
         # kA = 0 and no wall capacity: adiabatic pipe, the wall variable just follows the fluid
         self.no_wall = not self.fixed_wall and P["C_wall"] == 0
-        m_reg = P["m_reg"] if P["m_reg"] is not None else 1e-4 * max(P["m_nominal"], 1e-12)
+        m_reg = P["m_reg"] if P["m_reg"] is not None else M_REG_REL * max(P["m_nominal"], 1e-12)
         self.channel = Channel(
             prefix="",
             inlet="inlet",

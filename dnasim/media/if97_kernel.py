@@ -59,7 +59,7 @@ formulation at that T.
 
 Then::
 
-    rho = 1/v     u = h - p v (exactly)     cp = (dh/dT)_p
+    rho = 1/v     u = h - p/rho (exactly)     cp = (dh/dT)_p
     (drho/dh)_p = -(dv/dT)_p / (v^2 cp)
     (drho/dp)_h = -[(dv/dp)_T - (dv/dT)_p (dh/dp)_T / cp] / v^2
 
@@ -712,10 +712,11 @@ def _fill_single(r, sel, p, h, T, rec, region):
     v = rec[_V]
     cp = rec[_HT]
     vT = rec[_VT]
+    rho = 1.0 / v
     r.T[sel] = T
     r.v[sel] = v
-    r.rho[sel] = 1.0 / v
-    r.u[sel] = h - p * v
+    r.rho[sel] = rho
+    r.u[sel] = h - p / rho  # exactly h - p / rho (FluidState's promise)
     r.s[sel] = rec[_S]
     r.cp[sel] = cp
     r.drho_dh_p[sel] = -vT / (v * v * cp)
@@ -818,7 +819,7 @@ def _fill_two_phase(r, ix, p, h, Ts, dTs, recL, recV):
     r.T[ix] = Ts
     r.v[ix] = v
     r.rho[ix] = rho
-    r.u[ix] = h - p * v
+    r.u[ix] = h - p / rho
     r.s[ix] = recL[_S] + x * (recV[_S] - recL[_S])
     r.cp[ix] = np.inf
     r.x[ix] = x
@@ -998,7 +999,7 @@ def pT(p, T) -> PtResult:
         r.h[q] = rec[_H]
         r.v[q] = v
         r.rho[q] = 1.0 / v
-        r.u[q] = rec[_H] - p[q] * v
+        r.u[q] = rec[_H] - p[q] / r.rho[q]
         r.s[q] = rec[_S]
         r.cp[q] = cp
         r.drho_dh_p[q] = -rec[_VT] / (v * v * cp)

@@ -545,7 +545,7 @@ def ph_scalar(p, h):
             return (
                 Ts,
                 rho,
-                h - p * v,
+                h - p / rho,
                 recL[2] + x * (recV[2] - recL[2]),
                 math.inf,
                 x,
@@ -560,10 +560,11 @@ def ph_scalar(p, h):
     v = rec[0]
     cp = rec[5]
     vT = rec[3]
+    rho = 1.0 / v
     return (
         T,
-        1.0 / v,
-        h - p * v,
+        rho,
+        h - p / rho,
         rec[2],
         cp,
         nan,

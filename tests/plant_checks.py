@@ -1,0 +1,61 @@
+"""Helpers for the plant field tests: running plant files, closing balances."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from dnasim.components import MassFlowBoundary, Pipe, PressureBoundary
+from dnasim.plantfile import load, loads, simulate_plant
+
+PLANTS = Path(__file__).resolve().parent / "plants"
+
+
+def run_file(name: str, replace: dict | None = None, **overrides):
+    """Load tests/plants/<name> (optionally with text replacements), simulate it with
+    its own [simulation] settings; returns (plant, results)."""
+    path = PLANTS / name
+    text = path.read_text()
+    for old, new in (replace or {}).items():
+        assert old in text, f"{old!r} not in {name}"
+        text = text.replace(old, new)
+    loaded = loads(text, str(path)) if replace else load(path)
+    return loaded.plant, simulate_plant(loaded.plant, loaded.simulation, **overrides)
+
+
+def balances(plant, res):
+    """Mass and energy balance errors over the run and the throughputs.
+
+    Stored: sum over pipes of M_total and U_total + E_wall. Passed (positive into
+    the plant): the boundaries' M_passed and H_passed, minus the heat to fixed
+    walls (Q_passed). Throughput: the total variation of the boundaries' running
+    integrals (mass [kg], energy [J]) plus the heat to fixed walls."""
+    pipes = [c.name for c in plant.components.values() if isinstance(c, Pipe)]
+    bounds = [
+        c.name
+        for c in plant.components.values()
+        if isinstance(c, (PressureBoundary, MassFlowBoundary))
+    ]
+    M = sum(res[f"{p}.M_total"] for p in pipes)
+    E = sum(res[f"{p}.U_total"] + res[f"{p}.E_wall"] for p in pipes)
+    M_in = sum(res[f"{b}.M_passed"] for b in bounds)
+    H_in = sum(res[f"{b}.H_passed"] for b in bounds)
+    Q_out = sum(res[f"{p}.Q_passed"] for p in pipes if f"{p}.Q_passed" in res)
+    err_M = np.max(np.abs((M - M[0]) - (M_in - M_in[0])))
+    err_E = np.max(np.abs((E - E[0]) - (H_in - H_in[0]) + (Q_out - np.ravel(Q_out)[0])))
+    thr_M = sum(np.sum(np.abs(np.diff(res[f"{b}.M_passed"]))) for b in bounds)
+    thr_E = sum(np.sum(np.abs(np.diff(res[f"{b}.H_passed"]))) for b in bounds)
+    thr_E += sum(
+        np.sum(np.abs(np.diff(res[f"{p}.Q_passed"]))) for p in pipes if f"{p}.Q_passed" in res
+    )
+    return err_M, thr_M, err_E, thr_E
+
+
+def node_temperatures(plant, res):
+    """All fluid temperatures [K]: every node and every pipe volume, over t."""
+    out = [res[f"{n}.T"] for n in plant.node_names()]
+    for c in plant.components.values():
+        if isinstance(c, Pipe):
+            out += [res[f"{c.name}.T[{i}]"] for i in range(c.n)]
+    return np.array(out)
