@@ -71,7 +71,7 @@ def main(argv=None):
         if failures:
             print("\nfailed checks:")
             for name, n, d in failures:
-                print(f"  {name}: {n}: {d[:300]}")
+                print(f"  {name}: {n}: {d[:900]}")
         if args.repeat > 0:
             steps = []
             for i in range(args.repeat):
