@@ -1,155 +1,163 @@
-"""Microseconds per ``Medium.state(p, h)`` call for each backend of dnasim.media.
+"""Microseconds per water/steam state: the IF97 kernel (numpy, numba) vs the old path.
 
-Run:  .venv/bin/python benchmarks/media_speed.py [--n N]
+Run:  .venv/bin/python benchmarks/media_speed.py [--quick]
 
-"miss": every call has a new h (h + k * 1 mJ/kg), so the cache never hits and
-each call is one full evaluation (T, rho, u, s, cp, quality and both
-derivatives). "hit": the same (p, h) again, i.e. a dict lookup. Each figure is
-the best of three runs (the machine may be shared). For
-comparison, ``PropsSI`` is timed for the *single* output T from (H, P), which
-is the cheapest thing PropsSI can do; a full state through PropsSI costs about
-five times that.
+Table 1, per batch size n = 1, 100, 1000, 10000 and per state mix, the CPU time per
+state of
+
+- ``numpy``: :func:`dnasim.media.if97_kernel.ph` on arrays of n states (one call);
+- ``numba``: :func:`dnasim.media.if97_numba.ph_arrays` (one call, compiled loop);
+- ``numba 1x1``: n calls of the scalar ``IF97Water.state(p, h)`` (cache missed: each
+  h is new), the path the components use today;
+- ``old``: n calls of ``state(p, h)`` of the IF97 medium of commit ea86a1d (CoolProp's
+  IF97 flash plus a Newton refinement, one state at a time), loaded from git history;
+  skipped if git or that commit is not available.
+
+State mixes (each batch cycles through its states with h varied by 1 mJ/kg steps so
+no cache can hit): "liquid" 1 MPa / 400 kJ/kg, "two-phase" 1 MPa / 1500 kJ/kg,
+"vapour" 1 MPa / 3000 kJ/kg, "supercrit." 25 MPa / 2000 kJ/kg (region 3), and
+"plant mix": 1000 states spread over a boiling pipe at 10, 60 and 190 bar (liquid,
+two-phase, vapour in equal parts). Best of 3 repetitions (the machine may be shared),
+``time.process_time`` (CPU time). Table 2: one-off costs (import, first compiled call).
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime
+import os
 import platform
+import subprocess
+import sys
+import tempfile
 import time
 
-import CoolProp
-import CoolProp.CoolProp as CP
+import numpy as np
 
-from dnasim.media import get_medium
-
-WATER_STATES = {
-    "liquid": (1e6, 4.0e5),  # 1 MPa, 95 degC
-    "two-phase": (1e6, 1.5e6),  # 1 MPa, x = 0.31
-    "vapour": (1e6, 3.0e6),  # 1 MPa, 280 degC
-    "supercrit.": (25e6, 2.0e6),  # 25 MPa, 655 K (IF97 region 3)
+STATES = {
+    "liquid": (1e6, 4.0e5),
+    "two-phase": (1e6, 1.5e6),
+    "vapour": (1e6, 3.0e6),
+    "supercrit.": (25e6, 2.0e6),
 }
-AIR_STATE = (1e5, 3.0e4)  # 1 bar, 303 K
 
 
-def time_misses(fn, p, h, n, repeats=3):
-    """us per call of fn(p, h_k) with a new h_k each call (best of ``repeats``); nan if fn fails."""
-    try:
-        fn(p, h)
-    except (ValueError, IndexError):  # CoolProp's own IF97 (p, h) flash fails in region 3 above p_c
-        return float("nan")
-    best = float("inf")
-    for r in range(repeats):
-        hs = [h + 1e-3 * (k + r * n + 1) for k in range(n)]
-        t0 = time.perf_counter()
-        for hk in hs:
-            fn(p, hk)
-        best = min(best, (time.perf_counter() - t0) / n * 1e6)
-    return best
+def plant_mix(n):
+    """n (p, h) of a boiling pipe at 10, 60, 190 bar: subcooled to superheated."""
+    p = np.repeat([10e5, 60e5, 190e5], -(-n // 3))[:n]
+    h = np.tile(np.linspace(5e5, 3.0e6, -(-n // 3)), 3)[:n]
+    return p, h
 
 
-def time_hits(fn, p, h, n, repeats=3):
-    fn(p, h)
-    best = float("inf")
+def batch(name, n):
+    if name == "plant mix":
+        return plant_mix(n)
+    p0, h0 = STATES[name]
+    return np.full(n, p0), h0 + 1e-3 * np.arange(n)
+
+
+def best(fn, repeats=3):
+    t = np.inf
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn(p, h)
-        best = min(best, (time.perf_counter() - t0) / n * 1e6)
-    return best
+        t0 = time.process_time()
+        fn()
+        t = min(t, time.process_time() - t0)
+    return t
+
+
+def load_old_medium():
+    """The IF97 medium of commit ea86a1d (CoolProp IF97 + Newton), or None."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    try:
+        src = subprocess.run(
+            ["git", "-C", root, "show", "ea86a1d:dnasim/media/if97.py"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    import importlib.util
+
+    with tempfile.NamedTemporaryFile("w", suffix="_old_if97.py", delete=False) as f:
+        f.write(src)
+    spec = importlib.util.spec_from_file_location("old_if97", f.name)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    os.unlink(f.name)
+    return mod.IF97Water()
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument(
-        "--n", type=int, default=2000, help="calls per (backend, state) for the fast backends"
-    )
+    ap.add_argument("--quick", action="store_true", help="n up to 1000 only")
     args = ap.parse_args()
-    n = args.n
+    sizes = [1, 100, 1000] if args.quick else [1, 100, 1000, 10000]
 
-    t0 = time.perf_counter()
-    bicubic = get_medium("Water", backend="BICUBIC&HEOS")
-    bicubic.state(1e5, 1e5)  # triggers loading (or building) the tables
-    t_bicubic = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    ttse = get_medium("Water", backend="TTSE&HEOS")
-    ttse.state(1e5, 1e5)
-    t_ttse = time.perf_counter() - t0
+    t0 = time.process_time()
+    from dnasim.media import if97_kernel as K
+    from dnasim.media import if97_numba as NB
+    from dnasim.media.if97 import IF97Water
+
+    t_import = time.process_time() - t0
+    t0 = time.process_time()
+    NB.ph_scalar(1e6, 4e5)
+    NB.ph_arrays(np.array([1e6]), np.array([4e5]))
+    t_first = time.process_time() - t0
+    t0 = time.process_time()
+    old = load_old_medium()
+    t_old_load = time.process_time() - t0
+    water = IF97Water(kernel="numba")
 
     rows = []
-    media = [
-        ("IF97 water", get_medium("Water"), n),
-        ("HEOS water", get_medium("Water", backend="HEOS"), max(n // 10, 50)),
-        ("BICUBIC&HEOS water", bicubic, n),
-        ("TTSE&HEOS water", ttse, n),
-    ]
-    for label, medium, nn in media:
-        medium.cache_clear()
-        misses = [time_misses(medium.state, p, h, nn) for p, h in WATER_STATES.values()]
-        hit = time_hits(medium.state, *WATER_STATES["liquid"], 20 * n)
-        rows.append((label, misses, hit))
+    for name in [*STATES, "plant mix"]:
+        for n in sizes:
+            p, h = batch(name, n)
+            pl, hl = p.tolist(), h.tolist()
+            reps = max(1, 2000 // n)
 
-    air = get_medium("Air")
-    air.cache_clear()
-    rows.append(
-        (
-            "ideal-gas air",
-            [time_misses(air.state, *AIR_STATE, 10 * n)] + [None] * 3,
-            time_hits(air.state, *AIR_STATE, 20 * n),
-        )
-    )
+            def run_numpy():
+                for _ in range(reps):
+                    K.ph(p, h)
 
-    for backend in ("IF97", "HEOS"):
-        fluid = f"{backend}::Water"
+            def run_numba():
+                for _ in range(reps):
+                    NB.ph_arrays(p, h)
 
-        def props(p, h, fluid=fluid):
-            return CP.PropsSI("T", "H", h, "P", p, fluid)
+            def run_scalar(medium):
+                def f():
+                    for _ in range(reps):
+                        medium.cache_clear()
+                        for pi, hi in zip(pl, hl, strict=True):
+                            medium.state(pi, hi)
 
-        nn = n if backend == "IF97" else max(n // 10, 50)
-        rows.append(
-            (
-                f"PropsSI T only, {backend}",
-                [time_misses(props, p, h, nn) for p, h in WATER_STATES.values()],
-                None,
-            )
-        )
+                return f
 
-    # the raw low-level flash, for reference: update(HmassP) + T() + rhomass()
-    for backend in ("IF97", "HEOS"):
-        AS = CP.AbstractState(backend, "Water")
+            per = 1e6 / (reps * n)
+            numpy_us = best(run_numpy) * per if n <= 1000 or name == "plant mix" else np.nan
+            numba_us = best(run_numba) * per
+            scal_us = best(run_scalar(water)) * per
+            old_us = np.nan
+            if old is not None and n <= 1000:
+                try:
+                    old_us = best(run_scalar(old), repeats=2) * per
+                except Exception:  # noqa: BLE001 - the old flash fails in region 3 above p_c
+                    old_us = np.nan
+            rows.append((name, n, numpy_us, numba_us, scal_us, old_us))
 
-        def raw(p, h, AS=AS):
-            AS.update(CP.HmassP_INPUTS, h, p)
-            return AS.T(), AS.rhomass()
-
-        nn = n if backend == "IF97" else max(n // 10, 50)
-        misses = [time_misses(raw, p, h, nn) for p, h in WATER_STATES.values()]
-        rows.append((f"raw AbstractState {backend} (T, rho)", misses, None))
-
-    now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    py = platform.python_version()
-    print(
-        f"dnasim.media speed, {now}; CoolProp {CoolProp.__version__}, "
-        f"Python {py}, {platform.machine()}"
-    )
-    print(
-        f"table load: BICUBIC&HEOS {t_bicubic:.2f} s, TTSE&HEOS {t_ttse:.2f} s (~/.CoolProp/Tables)"
-    )
-    print("us per state(p, h) call; miss = no cache hit (h varied each call); water states at")
-    print(
-        "  "
-        + ", ".join(
-            f"{k} (p={p / 1e6:g} MPa, h={h / 1e3:g} kJ/kg)" for k, (p, h) in WATER_STATES.items()
-        )
-    )
-    print(f"  air: p={AIR_STATE[0] / 1e5:g} bar, h={AIR_STATE[1] / 1e3:g} kJ/kg")
-    print("  nan: CoolProp's own IF97 (p, h) flash fails there (region 3 above p_c)")
-    head = f"{'backend':34s}" + "".join(f"{k:>12s}" for k in WATER_STATES) + f"{'hit':>9s}"
+    print(f"dnasim.media IF97 speed; Python {platform.python_version()}, {platform.machine()}")
+    print("CPU us per state (best of 3); old = ea86a1d's CoolProp IF97 + Newton, one state")
+    print("per call; nan: not run (numpy above 1000 single-state batches: slow; old above")
+    print("1000: slow) or failing (the old CoolProp flash fails in region 3 above p_c)")
+    head = f"{'states':12s}{'n':>7s}{'numpy':>10s}{'numba':>10s}{'numba 1x1':>11s}{'old':>10s}"
     print(head)
     print("-" * len(head))
-    for label, misses, hit in rows:
-        cells = "".join(f"{'-':>12s}" if m is None else f"{m:12.1f}" for m in misses)
-        print(f"{label:34s}{cells}" + (f"{hit:9.2f}" if hit is not None else f"{'-':>9s}"))
+    for name, n, a, b, c, d in rows:
+        print(f"{name:12s}{n:7d}{a:10.2f}{b:10.2f}{c:11.2f}{d:10.2f}")
+    print()
+    print(f"one-off CPU s: import kernels {t_import:.2f}, first compiled call {t_first:.2f}")
+    print("(numba's cache in __pycache__; without it the first call compiles), old medium load")
+    print(f"incl. CoolProp import {t_old_load:.2f}")
+    sys.stdout.flush()
 
 
 if __name__ == "__main__":

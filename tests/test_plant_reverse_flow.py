@@ -201,9 +201,7 @@ def test_mass_flow_sink_takes_negative_flow():
     # m < 0 at a MassFlowBoundary takes fluid out of the plant
     plant, res = run_file(
         "steam_pipe_reversal.toml",
-        {
-            'type = "PressureBoundary"\np = { type = "ramp"': 'type = "MassFlowBoundary"\nm = -3.0 #',
-        },
+        {'type = "PressureBoundary"\np = { type = "ramp"': 'type = "MassFlowBoundary"\nm = -3 #'},
         t_end=5.0,
     )
     assert res.success, res.message

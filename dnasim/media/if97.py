@@ -45,11 +45,11 @@ class IF97Water(Medium):
     Parameters
     ----------
     kernel : str
-        ``"numba"`` (default when numba is importable: :mod:`if97_numba`, about 1 us per
-        state for one state or many; the first use on a machine compiles it, which takes
-        tens of seconds, later processes load it from numba's cache in about a second)
-        or ``"numpy"`` (:mod:`if97_kernel`: no compilation, but about 1 ms for a single
-        state and 1 to 15 us per state in calls of 1000 states).
+        ``"numba"`` (default when numba is importable: :mod:`if97_numba`, 0.7 to 1.1 us
+        per state in ``states``, 3 us per ``state`` call; the first use on a machine
+        compiles it, about 10 s CPU, later processes load it from numba's cache in about
+        0.3 s) or ``"numpy"`` (:mod:`if97_kernel`: no compilation, but 0.3 to 1 ms for a
+        single state and 1.3 to 9 us per state in calls of 1000 states).
     """
 
     condensable = True
@@ -126,12 +126,8 @@ class IF97Water(Medium):
     def saturation_enthalpies(self, p):
         """(h', h'') [J/kg] at p [Pa] (arrays of the shape of p); NaN outside [611.213 Pa, p_c)."""
         p = np.asarray(p, dtype=float)
-        if self.kernel == "numba" and p.size <= 8:
-            hl = np.empty(p.shape)
-            hv = np.empty(p.shape)
-            for i, pi in enumerate(p.flat):
-                hl.flat[i], hv.flat[i] = NB.saturation_scalar(pi)
-            return hl, hv
+        if self.kernel == "numba":
+            return NB.saturation_arrays(p)
         hl, hv = K.saturation_enthalpies(p)
         return hl.reshape(p.shape), hv.reshape(p.shape)
 

@@ -5,15 +5,23 @@ Same formulations, blending bands, iterations and tolerances as the numpy kernel
 cost per state no longer depends on how many states a call has. The numpy kernel is
 the reference; tests/test_if97_kernel.py checks that both agree to round-off.
 
-Why it exists (benchmarks/media_speed.py): numpy's cost is per array operation, so
-the numpy kernel takes about 1 ms for a single state (hundreds of small array
-operations) and 1 to 8 us per state at 1000 states; this one takes about 1 us per
-state at any size, which matters for the scalar ``state(p, h)`` the components
-call today. :func:`available` is False when numba cannot be imported; the media
+Why it exists (benchmarks/media_speed.py, CPU us per state): numpy's cost is per
+array operation, so the numpy kernel takes 340 to 1070 us for a single state
+(hundreds of small array operations) and 1.3 to 9 us per state in calls of 1000;
+this one takes 0.7 to 1.1 us per state in calls of 100 to 10000 states, and 3 us per
+scalar ``IF97Water.state(p, h)`` call including the Python around it (the old
+CoolProp path: 12 to 50 us). The price: about 10 s CPU to compile on first use on a
+machine (numba caches the result in ``__pycache__``; later processes load it in
+about 0.3 s). :func:`available` is False when numba cannot be imported; the media
 then use the numpy kernel.
 
+Differences from the numpy kernel: the power sums use tables of powers built by
+repeated multiplication instead of exp/log per term, and a single-phase state below
+21 MPa evaluates only the saturated side that decides its phase. Results agree with
+the numpy kernel to about 1e-12 (tests/test_if97_kernel.py).
+
 Entry points: :func:`ph_arrays` (fills arrays, like ``if97_kernel.ph``),
-:func:`ph_scalar` (one state, a tuple), :func:`h_pT_scalar`.
+:func:`ph_scalar` (one state, a tuple), :func:`h_pT_scalar`, :func:`saturation_arrays`.
 """
 
 from __future__ import annotations
@@ -66,10 +74,6 @@ NB23 = np.array(C.B23_N)
 NB2BC = np.array(C.B2BC_N)
 NH3AB = np.array(C.H3AB_N)
 
-R1_I, R1_J, R1_N = C.R1_I, C.R1_J, C.R1_N
-R2_I, R2_J, R2_N = C.R2_I, C.R2_J, C.R2_N
-R3_I, R3_J, R3_N = C.R3_I, C.R3_J, C.R3_N
-R5_I, R5_J, R5_N = C.R5_I, C.R5_J, C.R5_N
 R2_J0, R2_N0 = C.R2_J0, C.R2_N0
 R5_J0, R5_N0 = C.R5_J0, C.R5_N0
 T1_I, T1_J, T1_N = C.T1PH_I, C.T1PH_J, C.T1PH_N
@@ -82,16 +86,44 @@ V3A_I, V3A_J, V3A_N = C.V3APH_I, C.V3APH_J, C.V3APH_N
 V3B_I, V3B_J, V3B_N = C.V3BPH_I, C.V3BPH_J, C.V3BPH_N
 
 
+def _table(I, J, N):  # noqa: E741
+    """Integer exponents (offset to 0) and ranges of a coefficient table, for power tables."""
+    Ii = I.astype(np.int64)
+    Ji = J.astype(np.int64)
+    return (
+        Ii - Ii.min(),
+        Ji - Ji.min(),
+        N,
+        I,
+        J,
+        int(Ii.min()),
+        int(Ii.max()),
+        int(Ji.min()),
+        int(Ji.max()),
+    )
+
+
 @_njit
-def _sums(a, b, I, J, N):  # noqa: E741
-    """sum n a^I b^J times 1, I, J, I(I-1), J(J-1), I J (a, b > 0)."""
-    la = math.log(a)
-    lb = math.log(b)
+def _powers(x, lo, hi):
+    """x^lo, x^(lo+1), ..., x^hi by repeated multiplication (x^lo by one power)."""
+    out = np.empty(hi - lo + 1)
+    out[0] = x**lo
+    for k in range(1, hi - lo + 1):
+        out[k] = out[k - 1] * x
+    return out
+
+
+@_njit
+def _sums(a, b, tab):
+    """sum n a^I b^J times 1, I, J, I(I-1), J(J-1), I J (power tables, no exp)."""
+    Io, Jo, N, I, J, imin, imax, jmin, jmax = tab  # noqa: E741
+    pa = _powers(a, imin, imax)
+    pb = _powers(b, jmin, jmax)
     s0 = s1 = s2 = s3 = s4 = s5 = 0.0
     for k in range(N.size):
         i = I[k]
         j = J[k]
-        t = N[k] * math.exp(i * la + j * lb)
+        t = N[k] * pa[Io[k]] * pb[Jo[k]]
         s0 += t
         s1 += t * i
         s2 += t * j
@@ -108,6 +140,12 @@ def _poly(a, b, I, J, N):  # noqa: E741
     for k in range(N.size):
         s += N[k] * a ** int(I[k]) * b ** int(J[k])
     return s
+
+
+TAB_R1 = _table(C.R1_I, C.R1_J, C.R1_N)
+TAB_R2 = _table(C.R2_I, C.R2_J, C.R2_N)
+TAB_R3 = _table(C.R3_I, C.R3_J, C.R3_N)
+TAB_R5 = _table(C.R5_I, C.R5_J, C.R5_N)
 
 
 @_njit
@@ -138,14 +176,14 @@ def region1(p, T):
     tau = 1386.0 / T
     a = 7.1 - pi
     b = tau - 1.222
-    s0, s1, s2, s3, s4, s5 = _sums(a, b, R1_I, R1_J, R1_N)
+    s0, s1, s2, s3, s4, s5 = _sums(a, b, TAB_R1)
     return _gibbs(
         p, T, tau, 16.53e6, 1386.0, s0, -s1 / a, s3 / (a * a), s2 / b, s4 / (b * b), -s5 / (a * b)
     )
 
 
 @_njit
-def _region25(p, T, ps, Ts, J0, N0, I, J, N, shift):  # noqa: E741
+def _region25(p, T, ps, Ts, J0, N0, tab, shift):
     pi = p / ps
     tau = Ts / T
     g0 = g0t = g0tt = 0.0
@@ -155,7 +193,7 @@ def _region25(p, T, ps, Ts, J0, N0, I, J, N, shift):  # noqa: E741
         g0t += t * J0[k]
         g0tt += t * J0[k] * (J0[k] - 1.0)
     b = tau - shift
-    s0, s1, s2, s3, s4, s5 = _sums(pi, b, I, J, N)
+    s0, s1, s2, s3, s4, s5 = _sums(pi, b, tab)
     return _gibbs(
         p,
         T,
@@ -173,12 +211,12 @@ def _region25(p, T, ps, Ts, J0, N0, I, J, N, shift):  # noqa: E741
 
 @_njit
 def region2(p, T):
-    return _region25(p, T, 1e6, 540.0, R2_J0, R2_N0, R2_I, R2_J, R2_N, 0.5)
+    return _region25(p, T, 1e6, 540.0, R2_J0, R2_N0, TAB_R2, 0.5)
 
 
 @_njit
 def region5(p, T):
-    return _region25(p, T, 1e6, 1000.0, R5_J0, R5_N0, R5_I, R5_J, R5_N, 0.0)
+    return _region25(p, T, 1e6, 1000.0, R5_J0, R5_N0, TAB_R5, 0.0)
 
 
 @_njit
@@ -186,7 +224,7 @@ def region3(rho, T):
     """(p, dp/drho, dp/dT, dh/drho, dh/dT|rho, record) at (rho, T)."""
     delta = rho / RHO_C
     tau = T_C / T
-    s0, s1, s2, s3, s4, s5 = _sums(delta, tau, R3_I, R3_J, R3_N)
+    s0, s1, s2, s3, s4, s5 = _sums(delta, tau, TAB_R3)
     phi = N1_3 * math.log(delta) + s0
     fd = (N1_3 + s1) / delta
     fdd = (-N1_3 + s3) / (delta * delta)
@@ -519,7 +557,24 @@ def ph_scalar(p, h):
     lo = T_MIN
     hi = T_MAX_R5 if p <= P_R5_MAX else T_25
     if p < P_C:
-        Ts, dTs, recL, recV, _ = _sat_records(p)
+        Ts = _tsat(p)
+        # one saturated side decides most states; both are needed only in the dome and
+        # near p_c (where the dome closes)
+        near_c = p > 21e6
+        if near_c or h < 2.0e6:
+            recL, _, _, _ = _eval(p, Ts, True, math.nan)
+            if h < recL[1] and not near_c:
+                T, rec, reg, st = _solve_single(p, h, 1, lo, Ts)
+                return _single_out(p, h, T, rec, reg, st)
+            recV, _, _, _ = _eval(p, Ts, False, math.nan)
+        else:
+            recV, _, _, _ = _eval(p, Ts, False, math.nan)
+            if h > recV[1]:
+                T, rec, reg, st = _solve_single(p, h, -1, Ts, hi)
+                return _single_out(p, h, T, rec, reg, st)
+            recL, _, _, _ = _eval(p, Ts, True, math.nan)
+        _, dps = _psat_slope(Ts)
+        dTs = 1.0 / dps
         hL = recL[1]
         hV = recV[1]
         if not (hV > hL):
@@ -555,6 +610,12 @@ def ph_scalar(p, h):
                 0,
             )
     T, rec, reg, st = _solve_single(p, h, kind, lo, hi)
+    return _single_out(p, h, T, rec, reg, st)
+
+
+@_njit
+def _single_out(p, h, T, rec, reg, st):
+    nan = math.nan
     if st != 0:
         return nan, nan, nan, nan, nan, nan, nan, nan, 0, st
     v = rec[0]
@@ -647,3 +708,19 @@ def saturation_scalar(p):
         return math.nan, math.nan
     _, _, recL, recV, _ = _sat_records(p)
     return recL[1], recV[1]
+
+
+@_njit
+def _sat_loop(p, hl, hv):
+    for i in range(p.size):
+        hl[i], hv[i] = saturation_scalar(p[i])
+
+
+def saturation_arrays(p):
+    """(h', h'') [J/kg] arrays of the shape of p [Pa]; NaN outside [P_MIN, p_c)."""
+    p = np.asarray(p, dtype=float)
+    pf = np.ascontiguousarray(p.ravel())
+    hl = np.empty(pf.size)
+    hv = np.empty(pf.size)
+    _sat_loop(pf, hl, hv)
+    return hl.reshape(p.shape), hv.reshape(p.shape)
