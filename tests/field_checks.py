@@ -700,18 +700,24 @@ CASE = {c.name: c for c in CASES}
 def evaluate(case: Case, run: Run) -> Checks:
     """All checks of one run: finished, balances, the plant's physics.
 
-    An accepted stop (``case.may_stop``) counts as finished with no further checks."""
+    An accepted stop (``case.may_stop``: exit 1 with a message naming the cause) counts as
+    finished; the balances up to the stop are still checked, the plant's checks are not."""
     c = Checks()
-    if case.may_stop is not None and not run.finished and case.may_stop(run):
-        c.add("stopped with a located, named message", True, _last_line(run.message))
-        run.checks = c
-        return c
-    c.add(
-        "finished (exit 0, t_end reached)",
-        run.finished,
-        f"exit {run.returncode}, t = {run.t_reached:g} of {run.t_end:g} s; "
-        + _last_line(run.message),
+    stopped = (
+        case.may_stop is not None
+        and not run.finished
+        and run.returncode == 1
+        and case.may_stop(run)
     )
+    if stopped:
+        c.add("stopped with a located, named message", True, _last_line(run.message))
+    else:
+        c.add(
+            "finished (exit 0, t_end reached)",
+            run.finished,
+            f"exit {run.returncode}, t = {run.t_reached:g} of {run.t_end:g} s; "
+            + _last_line(run.message),
+        )
     if run.df is None or run.plant is None or len(run.df) < 2:
         run.checks = c
         return c
