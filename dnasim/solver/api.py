@@ -17,13 +17,15 @@ It validates the input, makes the initial values consistent, and steps with
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from dnasim.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
 from dnasim.solver.bdf import CountedResidual, NordsieckBDF, SolverStats
-from dnasim.solver.events import SwitchFunction, locate_zero
+from dnasim.solver.callbacks import call_user
+from dnasim.solver.events import SwitchFunction, locate_earliest, locate_zero
 from dnasim.solver.initial import detect_algebraic, solve_consistent
 from dnasim.solver.linear_algebra import IterationMatrix
 from dnasim.solver.result import DAEResult, NordsieckSolution
@@ -114,71 +116,18 @@ def solve_dae(
     )
     stats = SolverStats()
     F = CountedResidual(residual, problem.n, stats)
-    matrix = IterationMatrix(
-        F, problem.n, jac, problem.sparsity, variable_names, equation_names
-    )
+    matrix = IterationMatrix(F, problem.n, jac, problem.sparsity, variable_names, equation_names)
     t0, t_end = problem.t0, problem.t_end
     y, yp = problem.y0, problem.yp0
-    try:
-        F(t0, y, yp)
-    except ResidualDomainError as exc:
-        raise DAEError(f"The residual cannot be evaluated at the initial values: {exc}") from None
-    algebraic_mask = problem.algebraic
-    if algebraic_mask is None:
-        algebraic_mask = detect_algebraic(F, t0, y, yp, matrix)
-    error_mask = np.ones(problem.n)
-    if exclude_algebraic_from_error:
-        error_mask[algebraic_mask] = 0.0
-    span = t_end - t0
-    ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
-
-    def consistent(t, y, yp, what):
-        yp = np.array(yp, dtype=float)
-        yp[algebraic_mask] = 0.0  # not determined by F; the predictor starts them flat
-        return solve_consistent(
-            F,
-            t,
-            y,
-            yp,
-            algebraic_mask,
-            rtol=rtol,
-            atol=problem.atol,
-            h_scale=ic_scale,
-            matrix=matrix,
-            variable_names=variable_names,
-            equation_names=equation_names,
-            what=what,
-        )
-
-    if calc_initial:
-        y, yp = consistent(t0, y, yp, "the initial values")
-    solver = NordsieckBDF(
-        F,
-        t0,
-        y,
-        yp,
-        rtol=rtol,
-        atol=problem.atol,
-        max_order=max_order,
-        h0=h0,
-        max_step=max_step,
-        error_mask=error_mask,
-        matrix=matrix,
-        stats=stats,
-        t_scale=span,
-        names=variable_names,
-        equation_names=equation_names,
-    )
     out = _Output(problem.t_eval, callback, dense_output, t0)
-    out.initial(t0, y, yp)
     switches = [SwitchFunction.wrap(g, i) for i, g in enumerate(events)]
-    g_old = [sw.value(t0, y, yp) for sw in switches]
     event_log: list[dict] = []
     t_events: list[list] = [[] for _ in switches]
     y_events: list[list] = [[] for _ in switches]
     stops = [s for s in problem.tstops if t0 < s < t_end]
     status, message = 0, "The solver reached the end of the interval."
     restarts_here, last_restart_t = 0, None
+    solver = None
 
     def partial_result(success, status, message):
         return DAEResult(
@@ -195,6 +144,60 @@ def solve_dae(
         )
 
     try:
+        try:
+            F(t0, y, yp)
+        except ResidualDomainError as exc:
+            raise DAEError(
+                f"The residual cannot be evaluated at the initial values: {exc}"
+            ) from None
+        algebraic_mask = problem.algebraic
+        if algebraic_mask is None:
+            algebraic_mask = detect_algebraic(F, t0, y, yp, matrix)
+        error_mask = np.ones(problem.n)
+        if exclude_algebraic_from_error:
+            error_mask[algebraic_mask] = 0.0
+        span = t_end - t0
+        ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
+
+        def consistent(t, y, yp, what):
+            yp = np.array(yp, dtype=float)
+            yp[algebraic_mask] = 0.0  # not determined by F; the predictor starts them flat
+            return solve_consistent(
+                F,
+                t,
+                y,
+                yp,
+                algebraic_mask,
+                rtol=rtol,
+                atol=problem.atol,
+                h_scale=ic_scale,
+                matrix=matrix,
+                variable_names=variable_names,
+                equation_names=equation_names,
+                what=what,
+            )
+
+        if calc_initial:
+            y, yp = consistent(t0, y, yp, "the initial values")
+        solver = NordsieckBDF(
+            F,
+            t0,
+            y,
+            yp,
+            rtol=rtol,
+            atol=problem.atol,
+            max_order=max_order,
+            h0=h0,
+            max_step=max_step,
+            error_mask=error_mask,
+            matrix=matrix,
+            stats=stats,
+            t_scale=span,
+            names=variable_names,
+            equation_names=equation_names,
+        )
+        out.initial(t0, y, yp)
+        g_old = [sw.value(t0, y, yp) for sw in switches]
         while solver.t < t_end:
             if stats.steps >= max_steps:
                 raise DAEError(
@@ -205,46 +208,46 @@ def solve_dae(
             t_prev = solver.t
             solver.step(next_stop, left_limit=next_stop < t_end)
             g_new = [sw.value(solver.t, solver.y, solver.yp) for sw in switches]
-            cut = _earliest_crossing(solver, switches, g_old, g_new, t_prev)
-            for k, t_star, y_star, _yp_star, _g_star, iterates, _restarting in cut:
-                sw = switches[k]
-                event_log.append(
-                    {
-                        "event": k,
-                        "name": sw.name,
-                        "t": t_star,
-                        "iterates": iterates,
-                        "terminal": sw.terminal,
-                    }
-                )
-                t_events[k].append(t_star)
-                y_events[k].append(y_star)
-            if cut and cut[-1][-1]:
-                k, t_star, y_star, yp_star, g_star, iterates, _ = cut[-1]
-                sw = switches[k]
+            cut = _crossings(solver, switches, g_old, g_new, t_prev)
+            for c in cut:
+                sw = switches[c.switch]
+                for j in c.which:
+                    event_log.append(
+                        {
+                            "event": c.switch,
+                            "name": sw.names[j],
+                            "element": int(j),
+                            "t": c.t,
+                            "iterates": c.iterates if j == c.located else [],
+                            "terminal": sw.terminal,
+                        }
+                    )
+                    t_events[c.switch].append(c.t)
+                    y_events[c.switch].append(c.y)
+            if cut and cut[-1].restarts:
+                c = cut[-1]
+                sw = switches[c.switch]
+                t_star = c.t
                 out.step(solver, t_prev, t_star)
                 if sw.terminal:
                     status, message = (
                         1,
-                        f"A terminal switch, {sw.name!r}, fired at t = {t_star:.10g}.",
+                        f"A terminal switch, {sw.names[c.located]!r}, fired at t = {t_star:.10g}.",
                     )
                     break
                 if t_star == last_restart_t:
                     restarts_here += 1
                     if restarts_here > MAX_RESTARTS_AT_ONE_TIME:
                         raise DAEError(
-                            f"The switch {sw.name!r} fires again and again at t = {t_star:.10g} "
-                            "(chattering): its action does not move the state to the other side."
+                            f"The switch {sw.names[c.located]!r} fires again and again at "
+                            f"t = {t_star:.10g} (chattering): its action does not move the state "
+                            "to the other side."
                         )
                 else:
                     restarts_here, last_restart_t = 0, t_star
-                y_new, yp_new = y_star, yp_star
-                if sw.action is not None:
-                    changed = sw.action(t_star, y_star.copy(), yp_star.copy())
-                    if changed is not None:
-                        y_new, yp_new = (np.asarray(v, dtype=float) for v in changed)
+                y_new, yp_new = _run_action(sw, c, problem.n)
                 y_new, yp_new = consistent(
-                    t_star, y_new, yp_new, f"the values after the switch {sw.name!r}"
+                    t_star, y_new, yp_new, f"the values after the switch {sw.names[c.located]!r}"
                 )
                 solver.restart(t_star, y_new, yp_new)
                 out.restart(t_star, y_new, yp_new)
@@ -264,41 +267,102 @@ def solve_dae(
         result = partial_result(False, -1, str(exc))
         error = DAEError(str(exc))
         error.result = result
-        raise error from None
+        raise error from exc.__cause__
     except KeyboardInterrupt as exc:
         # Ctrl-C: hand the caller what was computed (it may write it to disk).
-        exc.result = partial_result(False, -2, f"Interrupted at t = {solver.t:.10g}.")
+        t_reached = solver.t if solver is not None else t0
+        exc.result = partial_result(False, -2, f"Interrupted at t = {t_reached:.10g}.")
         raise
     return partial_result(True, status, message)
 
 
-def _earliest_crossing(solver, switches, g_old, g_new, t_prev):
+@dataclass
+class _Crossing:
+    """A located crossing in the last step: switch index, time, state, elements."""
+
+    switch: int
+    t: float
+    y: np.ndarray
+    yp: np.ndarray
+    which: np.ndarray  # the elements that crossed at t (one for a scalar switch)
+    located: int  # the element whose zero was located (the iterates are its)
+    iterates: list
+    restarts: bool
+
+
+def _crossings(solver, switches, g_old, g_new, t_prev) -> list[_Crossing]:
     """Locate the crossings in the last step; return those up to the first that restarts.
 
-    Each entry: (switch index, t*, y*, y'*, g(t*), iterates, restarts). Crossings
-    of observing switches (no action, not terminal) before the first restarting
-    one are all returned; later ones are dropped (they are found again).
+    A restarting switch (terminal, with an action or ``restart``) gives its
+    earliest crossing only (elements crossing at the same located time are
+    reported together); an observing switch gives every crossed element, each
+    located on its own. Crossings of observing switches before the first
+    restarting one are all returned; later ones are dropped (found again after
+    the restart).
     """
     found = []
     for k, sw in enumerate(switches):
-        if not sw.crossed(g_old[k], g_new[k]):
+        crossed = sw.crossed(g_old[k], g_new[k])
+        if not crossed.any():
             continue
 
-        def g_of_t(t, sw=sw):
+        def values(t, sw=sw):
             y, yp = solver.interpolate(t)
             return sw.value(t, y, yp)
 
-        t_star, g_star, iterates = locate_zero(g_of_t, t_prev, g_old[k], solver.t, g_new[k])
-        y_star, yp_star = solver.interpolate(t_star)
-        restarts = sw.terminal or sw.action is not None
-        found.append((k, t_star, y_star, yp_star, g_star, iterates, restarts))
-    found.sort(key=lambda c: c[1])
+        if sw.restarts:
+            t_star, _, which, j, iterates = locate_earliest(
+                values, sw, t_prev, g_old[k], solver.t, g_new[k]
+            )
+            y_star, yp_star = solver.interpolate(t_star)
+            found.append(_Crossing(k, t_star, y_star, yp_star, which, j, iterates, True))
+            continue
+        for j in np.flatnonzero(crossed):
+
+            def element(t, values=values, j=j):
+                return float(values(t)[j])
+
+            t_star, _, iterates, _ = locate_zero(
+                element, t_prev, g_old[k][j], solver.t, g_new[k][j]
+            )
+            y_star, yp_star = solver.interpolate(t_star)
+            found.append(
+                _Crossing(k, t_star, y_star, yp_star, np.array([j]), int(j), iterates, False)
+            )
+    found.sort(key=lambda c: c.t)
     result = []
     for c in found:
         result.append(c)
-        if c[-1]:
+        if c.restarts:
             break
     return result
+
+
+def _run_action(sw, c: _Crossing, n: int):
+    """The switch's action at the crossing: new (y, yp), checked, or the located state."""
+    if sw.action is None:
+        return c.y, c.yp
+    args = (c.t, c.y.copy(), c.yp.copy()) + ((c.which.copy(),) if sw.vector else ())
+    changed = call_user(sw.action, f"the action of switch {sw.name!r}", c.t, *args)
+    if changed is None:
+        return c.y, c.yp
+    try:
+        y_new, yp_new = changed
+        y_new = np.asarray(y_new, dtype=float)
+        yp_new = np.asarray(yp_new, dtype=float)
+    except (TypeError, ValueError):
+        raise DAEError(
+            f"The action of switch {sw.name!r} returned {type(changed).__name__}; it must "
+            f"return None or a pair (y, yp) of arrays of {n} numbers."
+        ) from None
+    if y_new.shape != (n,) or yp_new.shape != (n,):
+        raise DAEError(
+            f"The action of switch {sw.name!r} returned arrays of shapes {y_new.shape} and "
+            f"{yp_new.shape}; it must return None or (y, yp) of shape ({n},) each."
+        )
+    if not (np.all(np.isfinite(y_new)) and np.all(np.isfinite(yp_new))):
+        raise DAEError(f"The action of switch {sw.name!r} returned NaN or inf at t = {c.t:.10g}.")
+    return y_new, yp_new
 
 
 class _Output:
@@ -319,7 +383,7 @@ class _Output:
         self.y.append(np.array(y))
         self.yp.append(np.array(yp))
         if self.callback is not None:
-            self.callback(t, y, yp)
+            call_user(self.callback, "the output callback", t, t, y, yp)
 
     def initial(self, t, y, yp):
         if self.t_eval is None:

@@ -27,6 +27,7 @@ import numpy as np
 
 from dnasim.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
+from dnasim.solver.callbacks import call_user
 from dnasim.solver.linear_algebra import IterationMatrix, SingularMatrixError
 
 EPS = float(np.finfo(float).eps)
@@ -78,14 +79,33 @@ class CountedResidual:
 
     def __call__(self, t, y, yp):
         self.stats.residual_evals += 1
-        f = self.residual(t, y, yp)
-        f = np.asarray(f, dtype=float)
+        f = call_user(self.residual, "the residual", t, t, y, yp)
+        if not (isinstance(f, np.ndarray) and f.dtype.kind == "f"):
+            f = _as_float_array(f, t)
         if f.shape != (self.n,):
             raise DAEError(
                 f"residual(t, y, yp) returned an array of shape {f.shape}; it must return "
                 f"shape ({self.n},), one equation per unknown."
             )
         return f
+
+
+def _as_float_array(f, t) -> np.ndarray:
+    """The residual's value as floats; strings, None or complex numbers are an error."""
+    arr = np.asarray(f)
+    if arr.dtype.kind not in "biuf":
+        raise DAEError(
+            f"residual(t, y, yp) returned {_describe(f)} at t = {float(t):.10g}; it must "
+            "return an array of real numbers."
+        )
+    return arr.astype(float)
+
+
+def _describe(f) -> str:
+    arr = np.asarray(f)
+    kinds = {"U": "strings", "S": "bytes", "O": "objects", "c": "complex numbers"}
+    what = kinds.get(arr.dtype.kind, f"values of type {arr.dtype}")
+    return f"{what} ({str(f)[:60]!r})"
 
 
 class NordsieckBDF:

@@ -26,6 +26,7 @@ import scipy.sparse.linalg
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
 from dnasim.errors import DAEError
+from dnasim.solver.callbacks import call_user
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 (_GETRS,) = scipy.linalg.get_lapack_funcs(("getrs",), (np.zeros(1),))
@@ -110,7 +111,7 @@ class IterationMatrix:
     def evaluate(self, t, y, yp, f0, cj, h, weights) -> None:
         """Compute J = dF/dy + cj dF/dy' at (t, y, yp); f0 = F(t, y, yp) already evaluated."""
         if self.jac is not None:
-            matrix = self.jac(t, y, yp, cj)
+            matrix = call_user(self.jac, "the Jacobian function jac", t, t, y, yp, cj)
             if scipy.sparse.issparse(matrix):
                 self.sparse = True
                 matrix = scipy.sparse.csc_matrix(matrix)
