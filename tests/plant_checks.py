@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
-from dnasim.components import MassFlowBoundary, Pipe, PressureBoundary
+from dnasim.components import HeatExchanger, MassFlowBoundary, Pipe, PressureBoundary
 from dnasim.plantfile import load, loads, simulate_plant
 
 PLANTS = Path(__file__).resolve().parent / "plants"
@@ -24,31 +25,52 @@ def run_file(name: str, replace: dict | None = None, **overrides):
     return loaded.plant, simulate_plant(loaded.plant, loaded.simulation, **overrides)
 
 
+def stored(plant, res):
+    """Mass [kg] and energy [J] stored in the plant over t: every component's fluid
+    masses M and internal energies U (Pipe, HeatExchanger sides, Attemperator) and
+    wall energies C T_w (Pipe E_wall, HeatExchanger C_wall/n sum T_w)."""
+    pat_M = re.compile(r"^(hot_|cold_)?M(\[\d+\])?$")
+    pat_U = re.compile(r"^(hot_|cold_)?U(\[\d+\])?$")
+    M = np.zeros_like(res.t)
+    E = np.zeros_like(res.t)
+    for name in res.variable_names:
+        comp, _, local = name.partition(".")
+        if pat_M.match(local):
+            M = M + res[name]
+        elif pat_U.match(local):
+            E = E + res[name]
+    for c in plant.components.values():
+        if isinstance(c, Pipe):
+            E = E + res[f"{c.name}.E_wall"]
+        elif isinstance(c, HeatExchanger):
+            C_i = c.params["C_wall"] / c.n
+            E = E + C_i * sum(res[f"{c.name}.T_w[{i}]"] for i in range(c.n))
+    return M, E
+
+
 def balances(plant, res):
     """Mass and energy balance errors over the run and the throughputs.
 
-    Stored: sum over pipes of M_total and U_total + E_wall. Passed (positive into
-    the plant): the boundaries' M_passed and H_passed, minus the heat to fixed
-    walls (Q_passed). Throughput: the total variation of the boundaries' running
-    integrals (mass [kg], energy [J]) plus the heat to fixed walls."""
+    Stored: ``stored()``. Passed (positive into the plant): the boundaries'
+    M_passed and H_passed, minus the heat to fixed walls (Q_passed). Throughput:
+    the total variation of the boundaries' running integrals (mass [kg], energy
+    [J]) plus that of the heat to fixed walls."""
     pipes = [c.name for c in plant.components.values() if isinstance(c, Pipe)]
     bounds = [
         c.name
         for c in plant.components.values()
         if isinstance(c, (PressureBoundary, MassFlowBoundary))
     ]
-    M = sum(res[f"{p}.M_total"] for p in pipes)
-    E = sum(res[f"{p}.U_total"] + res[f"{p}.E_wall"] for p in pipes)
+    M, E = stored(plant, res)
     M_in = sum(res[f"{b}.M_passed"] for b in bounds)
     H_in = sum(res[f"{b}.H_passed"] for b in bounds)
-    Q_out = sum(res[f"{p}.Q_passed"] for p in pipes if f"{p}.Q_passed" in res)
+    fixed = [p for p in pipes if f"{p}.Q_passed" in res]
+    Q_out = sum((res[f"{p}.Q_passed"] for p in fixed), np.zeros_like(res.t))
     err_M = np.max(np.abs((M - M[0]) - (M_in - M_in[0])))
-    err_E = np.max(np.abs((E - E[0]) - (H_in - H_in[0]) + (Q_out - np.ravel(Q_out)[0])))
+    err_E = np.max(np.abs((E - E[0]) - (H_in - H_in[0]) + (Q_out - Q_out[0])))
     thr_M = sum(np.sum(np.abs(np.diff(res[f"{b}.M_passed"]))) for b in bounds)
     thr_E = sum(np.sum(np.abs(np.diff(res[f"{b}.H_passed"]))) for b in bounds)
-    thr_E += sum(
-        np.sum(np.abs(np.diff(res[f"{p}.Q_passed"]))) for p in pipes if f"{p}.Q_passed" in res
-    )
+    thr_E += sum(np.sum(np.abs(np.diff(res[f"{p}.Q_passed"]))) for p in fixed)
     return err_M, thr_M, err_E, thr_E
 
 

@@ -10,7 +10,7 @@ the plant has m < 0. A boundary is source and sink at once:
 * fluid flowing out of the plant is absorbed, whatever its state.
 
 A boundary with neither ``h`` nor ``T`` is a sink only. If flow ever goes into the
-plant through it (m > 1e-6 m_nominal), a terminal switch stops the run with a
+plant through it (m > 1e-3 m_nominal), a terminal switch stops the run with a
 message naming the boundary and the time: give T or h for the reverse inflow.
 No temperature is invented.
 
@@ -29,12 +29,15 @@ from __future__ import annotations
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Param, Switch, Variable
-from dnasim.components.physics import energy_in
+from dnasim.components.physics import M_EPS_REL, energy_in
 from dnasim.errors import PlantError
 
 #: a sink-only boundary stops the run when more than this fraction of m_nominal
-#: flows into the plant through it (a threshold above the zero-flow round-off)
-REVERSE_INFLOW_TOL = 1e-6
+#: flows into the plant through it: the half-width of the upwind regularisation
+#: band (``physics.M_EPS_REL``), inside which the flow direction does not decide
+#: the enthalpy anyway. (1e-6 was tried: the solver's flow errors near zero flow,
+#: at the end of a line draining to a sink, exceeded it.)
+REVERSE_INFLOW_TOL = M_EPS_REL
 
 _STATE_PARAMS = (
     Param(

@@ -14,7 +14,9 @@ class TemperatureSensor(Component):
       lag    tau dT_s/dt = T(p, h) - T_s       (tau > 0)
              T_s = T(p, h)                     (tau = 0, ideal sensor)
 
-    T_s [K] is the signal output ``T``.
+    T_s [K] is the signal output ``T``. The node's (p, h) is the mixed state of the
+    fluid flowing into the node, so the sensor reads the upstream fluid in either
+    flow direction.
     """
 
     PARAMS = (
