@@ -10,6 +10,8 @@ It validates the input, makes the initial values consistent, and steps with
   step's interpolant (``events.locate_zero``), cuts the step there, runs the
   switch's action, makes the state consistent again and restarts at order 1
   (the seed's Fig. 10.7); several switches in one step: the earliest wins;
+  a vector switch (many elements, one call per step) brackets only the elements
+  that changed sign and locates the earliest (``events.locate_earliest``);
 - emits the output points (every step, or ``t_eval``) to the result and to an
   optional ``callback`` that can stream them to disk.
 """
@@ -78,9 +80,18 @@ def solve_dae(
     jac : optional jac(t, y, yp, cj) -> dF/dy + cj dF/dy', dense or sparse.
     jac_sparsity : optional pattern of dF/dy + dF/dy'; finite differences are
         then grouped by column colouring and the LU is sparse.
-    events : switch functions g(t, y, yp) -> float, with optional attributes
-        ``direction`` (-1, 0, 1), ``terminal`` (bool), ``action(t, y, yp)``
+    events : switch functions, scalar or vector (see ``dnasim.solver.events``).
+        Scalar: g(t, y, yp) -> float, with optional attributes ``direction``
+        (-1, 0, 1), ``terminal`` (bool), ``restart`` (bool), ``action(t, y, yp)``
         returning new (y, yp) or None, and ``name``.
+        Vector: an object with an integer attribute ``size``, called once per
+        step as g(t, y, yp) -> array of shape (size,); ``direction`` a scalar or
+        an array of -1/0/+1, ``names`` (size strings), ``terminal``, ``restart``
+        and optional ``action(t, y, yp, which)``, ``which`` the int array of the
+        elements that crossed at the located time. A switch with an action, or
+        terminal, or with ``restart = True`` cuts the step at its earliest
+        crossing, is made consistent there and restarts at order 1; otherwise its
+        crossings are only located and logged. The event log names the element.
     tstops : known discontinuity times, hit exactly; restart at order 1.
     t_eval : output times (default: every accepted step).
     calc_initial : make (y0, yp0) consistent first (keep the differential y0).
@@ -456,19 +467,19 @@ class _Problem:
         p = cls()
         if not callable(residual):
             raise DAEError("residual must be a function F(t, y, yp) -> array.")
-        try:
-            t0, t_end = (float(v) for v in t_span)
-        except (TypeError, ValueError):
-            raise DAEError(f"t_span must be two numbers (t0, t_end); got {t_span!r}.") from None
+        span = _real_array(t_span, "t_span").ravel()
+        if span.size != 2:
+            raise DAEError(f"t_span must be two numbers (t0, t_end); got {t_span!r}.")
+        t0, t_end = float(span[0]), float(span[1])
         if not (np.isfinite(t0) and np.isfinite(t_end)) or t_end <= t0:
             raise DAEError(f"t_span must be finite with t_end > t0; got ({t0}, {t_end}).")
         p.t0, p.t_end = t0, t_end
         p.y0 = _vector(y0, "y0")
         p.n = n = p.y0.size
         p.yp0 = np.zeros(n) if yp0 is None else _vector(yp0, "yp0", n)
-        if not (np.isscalar(rtol) and np.isfinite(rtol) and 0.0 < rtol < 1.0):
+        if not (_is_real(rtol) and np.isfinite(rtol) and 0.0 < rtol < 1.0):
             raise DAEError(f"rtol must be one number between 0 and 1; got {rtol!r}.")
-        a = np.asarray(atol, dtype=float)
+        a = _real_array(atol, "atol")
         if a.ndim == 0:
             a = np.full(n, float(a))
         if a.shape != (n,) or not np.all(np.isfinite(a)) or np.any(a <= 0.0):
@@ -479,9 +490,9 @@ class _Problem:
         p.atol = a
         if max_order not in (1, 2, 3, 4, 5):
             raise DAEError(f"max_order must be 1, 2, 3, 4 or 5; got {max_order!r}.")
-        if h0 is not None and not (np.isfinite(h0) and h0 > 0):
+        if h0 is not None and not (_is_real(h0) and np.isfinite(h0) and h0 > 0):
             raise DAEError(f"h0 must be a positive number; got {h0!r}.")
-        if not max_step > 0:
+        if not (_is_real(max_step) and max_step > 0):
             raise DAEError(f"max_step must be positive; got {max_step!r}.")
         p.algebraic = None
         if algebraic is not None:
@@ -503,12 +514,15 @@ class _Problem:
             raise DAEError(
                 f"jac_sparsity must have shape ({n}, {n}); got {getattr(sparsity, 'shape', None)}."
             )
-        p.tstops = sorted(float(s) for s in np.atleast_1d(np.asarray(tstops, dtype=float)))
+        p.tstops = sorted(float(s) for s in np.atleast_1d(_real_array(tstops, "tstops")))
         if any(not np.isfinite(s) for s in p.tstops):
             raise DAEError("tstops must be finite times.")
         p.t_eval = None
         if t_eval is not None:
-            te = np.asarray(t_eval, dtype=float).ravel()
+            te = _real_array(t_eval, "t_eval").ravel()
+            if not np.all(np.isfinite(te)):
+                bad = np.flatnonzero(~np.isfinite(te))[:5].tolist()
+                raise DAEError(f"t_eval holds NaN or inf at index(es) {bad}.")
             if np.any(np.diff(te) < 0) or te.size == 0:
                 raise DAEError("t_eval must be a non-empty, increasing sequence of times.")
             if te[0] < t0 or te[-1] > t_end:
@@ -523,11 +537,26 @@ class _Problem:
         return p
 
 
-def _vector(v, what, n=None) -> np.ndarray:
+def _is_real(v) -> bool:
+    """A real number (bool excluded), as Python or numpy scalar."""
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _real_array(v, what) -> np.ndarray:
+    """v as a float array; strings, complex numbers, None or objects are refused."""
     try:
-        arr = np.array(v, dtype=float)
+        raw = np.asarray(v)
     except (TypeError, ValueError):
-        raise DAEError(f"{what} must be an array of numbers.") from None
+        raise DAEError(f"{what} must be an array of real numbers.") from None
+    if raw.dtype.kind not in "biuf":
+        kinds = {"U": "strings", "S": "bytes", "c": "complex numbers", "O": "non-numbers"}
+        got = kinds.get(raw.dtype.kind, f"values of type {raw.dtype}")
+        raise DAEError(f"{what} must hold real numbers; it holds {got}.")
+    return raw.astype(float)
+
+
+def _vector(v, what, n=None) -> np.ndarray:
+    arr = np.array(_real_array(v, what), dtype=float)
     if arr.ndim != 1 or arr.size == 0:
         raise DAEError(f"{what} must be a one-dimensional array; got shape {arr.shape}.")
     if n is not None and arr.size != n:

@@ -266,7 +266,10 @@ def detect_algebraic(residual, t, y, yp, matrix: IterationMatrix) -> np.ndarray:
     """Components whose derivative does not appear in F, found by probing dF/dy'.
 
     A column of dF/dy' that is zero at the initial point and at a perturbed point
-    marks an algebraic component.
+    marks an algebraic component. A column that looks zero is probed again with
+    increments 1e4, 1e8 and 1e12 times larger: when F holds terms far larger than
+    the y' term (y' + 1e12 y, say), a small increment of y' is lost in round-off
+    and the component would be taken for algebraic.
     """
     n = y.size
     mask = np.ones(n, dtype=bool)
@@ -278,5 +281,17 @@ def detect_algebraic(residual, t, y, yp, matrix: IterationMatrix) -> np.ndarray:
         jac = matrix.finite_difference(t, y, yp_probe, f0, inc, 0.0, 1.0)
         dense = jac.toarray() if hasattr(jac, "toarray") else jac
         mask &= ~np.any(dense != 0.0, axis=0)
+        for j in np.flatnonzero(mask):
+            for factor in (1e4, 1e8, 1e12):
+                probe = yp_probe.copy()
+                probe[j] += factor * inc[j]
+                try:
+                    f1 = residual(t, y, probe)
+                except ResidualDomainError:
+                    mask[j] = False  # it depends on y'_j (its domain does)
+                    break
+                if np.any(f1 != f0):
+                    mask[j] = False
+                    break
     matrix.matrix = None
     return mask
