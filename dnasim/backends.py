@@ -1,8 +1,8 @@
 """Solver backends: objects that integrate a ``Problem`` (F(t, y, y') = 0 and nothing
 of the plant) and return a DAEResult-like record.
 
-    NordsieckBDF(rtol=1e-6, atol_scaled=1e-8, max_order=4, ...)   # dnasim.solve_dae
-    IDA(rtol=1e-6, atol_scaled=1e-8, ...)                          # SUNDIALS, scikit-sundae
+    NordsieckBDF(rtol=1e-6, atol_scaled=1e-6, max_order=4, ...)   # dnasim.solve_dae
+    IDA(rtol=1e-6, atol_scaled=1e-6, ...)                          # SUNDIALS, scikit-sundae
 
 Contract: ``backend.name`` (str), ``backend.rtol``, ``backend.atol_scaled`` and
 ``backend.solve(problem)`` returning an object with t, y, yp, success, status,
@@ -12,7 +12,7 @@ False), not raised. ``dnasim.simulation.simulate`` turns it into ``Results``.
 Tolerances (one meaning everywhere above ``solve_dae``): ``rtol`` relative,
 ``atol_scaled`` per unit of each variable's scale, atol_i = atol_scaled *
 max(nominal_i, |y0_i|) (``System.atol_vector``); ``Problem.atol`` is that
-vector. Defaults rtol = 1e-6, atol_scaled = 1e-8.
+vector. Defaults rtol = 1e-6, atol_scaled = 1e-6.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from dnasim.errors import DAEError
 __all__ = ["ATOL_SCALED", "IDA", "NordsieckBDF", "Problem", "RTOL", "SOLVER_OPTIONS"]
 
 RTOL = 1e-6  # default relative tolerance
-ATOL_SCALED = 1e-8  # default absolute tolerance per unit of each variable's scale
+ATOL_SCALED = 1e-6  # default absolute tolerance per unit of each variable's scale
 #: the keywords of simulate() that configure the default backend
 SOLVER_OPTIONS = ("rtol", "atol_scaled", "max_order", "max_step", "max_steps", "h0")
 
@@ -46,7 +46,10 @@ class Problem:
     tstops: list
     atol: np.ndarray  # absolute tolerance per variable
     variable_names: list
+    equation_names: list = None
     t_eval: object = None
+    #: output every output_interval [s] (generated as the solver goes), else t_eval
+    output_interval: float | None = None
     callback: object = None
     #: the System, only for IDA's re-initialisation after a restart (the damped
     #: Newton of dnasim.initialization needs its nominal scales and patterns)
@@ -73,7 +76,6 @@ class NordsieckBDF:
     def solve(self, pb: Problem):
         from dnasim.solver import solve_dae
 
-        extra = {} if self.keep_output else {"keep_output": False}
         try:
             return solve_dae(
                 pb.residual,
@@ -84,6 +86,8 @@ class NordsieckBDF:
                 jac_sparsity=pb.jac_sparsity,
                 calc_initial=False,
                 variable_names=pb.variable_names,
+                equation_names=pb.equation_names,
+                output_interval=pb.output_interval,
                 rtol=self.rtol,
                 atol=pb.atol,
                 max_order=self.max_order,
@@ -96,7 +100,7 @@ class NordsieckBDF:
                 exclude_algebraic_from_error=self.exclude_algebraic_from_error,
                 dense_output=self.dense_output,
                 max_steps=self.max_steps,
-                **extra,
+                keep_output=self.keep_output,
             )
         except DAEError as err:
             res = getattr(err, "result", None)

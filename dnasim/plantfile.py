@@ -89,7 +89,7 @@ SIMULATION_KEYS = {
     "output_interval": "time between rows of results.csv [s] (default: every accepted step)",
     "rtol": "relative error tolerance (default 1e-6)",
     "atol_scaled": "absolute error tolerance per unit of each variable's scale: "
-    "atol_i = atol_scaled * max(nominal_i, |y0_i|) (default 1e-8)",
+    "atol_i = atol_scaled * max(nominal_i, |y0_i|) (default 1e-6)",
     "max_order": "maximum BDF order, 1..5 (default 4)",
     "start": '"steady" (steady state at t_start) or "given" (initial states from parameters)',
     "max_step": "largest step size [s] (default: unlimited)",

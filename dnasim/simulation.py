@@ -3,7 +3,7 @@
 Backends are in ``dnasim.backends``, sinks in ``dnasim.sinks``.
 
     system = compile(plant)
-    res = simulate(system, t_end=100.0, solver=NordsieckBDF(rtol=1e-6, atol_scaled=1e-8),
+    res = simulate(system, t_end=100.0, solver=NordsieckBDF(rtol=1e-6, atol_scaled=1e-6),
                    sinks=[CSVSink("out/results.csv")])
 
 Contracts
@@ -20,7 +20,7 @@ Contracts
   relative to each variable's scale, atol_i = atol_scaled * max(nominal_i,
   |y0_i|) (``System.atol_vector``), so a pressure ~1e5 Pa gets 1e5 times the
   absolute tolerance of a valve opening ~1. One default everywhere:
-  rtol = 1e-6, atol_scaled = 1e-8. (``dnasim.solve_dae`` works on a bare DAE
+  rtol = 1e-6, atol_scaled = 1e-6. (``dnasim.solve_dae`` works on a bare DAE
   with no scales; its ``atol`` is the absolute atol_i itself.)
 * Failures: a solver failure ends the run with ``Results.success`` False and the
   reason in ``message``; ``throw=True`` raises ``DAEError`` with the Results as
@@ -127,6 +127,7 @@ def simulate(
         tstops=system.tstops(t0, t_end),
         atol=system.atol_vector(solver.atol_scaled, y0),
         variable_names=list(system.names),
+        equation_names=list(system.eq_names),
         t_eval=t_eval,
         callback=point if (sinks or callback is not None) else None,
         system=system,

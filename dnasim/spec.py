@@ -65,7 +65,7 @@ class SimulationSettings:
     t_start: float = 0.0
     output_interval: float | None = None
     rtol: float = 1e-6
-    atol_scaled: float = 1e-8  # atol_i = atol_scaled * max(nominal_i, |y0_i|)
+    atol_scaled: float = 1e-6  # atol_i = atol_scaled * max(nominal_i, |y0_i|)
     max_order: int = 4
     start: str = "steady"
     max_step: float | None = None

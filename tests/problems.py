@@ -104,3 +104,61 @@ def as_residual(rhs):
         return yp - rhs(t, y)
 
     return residual
+
+
+# --- Transistor amplifier (TRANSAMP), Test Set for IVP Solvers, University of Bari --------
+# Index-1 DAE of dimension 8, M y' = f(t, y) with a singular, non-diagonal M and the input
+# U_e(t) = 0.1 sin(200 pi t) [V], t in [0, 0.2] s. Definition, consistent initial values
+# and the reference y(0.2) (PSIDE at rtol = atol = 1e-14 on a Cray C90) are those of the
+# Test Set's transamp.f (http://www.dm.uniba.it/~testset/, revision 1.3, 2006), as also
+# transcribed in R's deTestSet and OdePkg's odepkg_testsuite_impltrans.m.
+TA_UB, TA_UF, TA_ALPHA, TA_BETA = 6.0, 0.026, 0.99, 1e-6  # [V], [V], [-], [A]
+TA_R0, TA_R = 1000.0, 9000.0  # R0 and R1 ... R9 [Ohm]
+TA_C = np.array([1e-6, 2e-6, 3e-6, 4e-6, 5e-6])  # C1 ... C5 [F]
+TRANSAMP_T_END = 0.2
+TRANSAMP_Y0 = np.array([0.0, 3.0, 3.0, 6.0, 3.0, 3.0, 6.0, 0.0])
+TRANSAMP_YP0 = np.array(
+    [
+        51.338775,
+        51.338775,
+        -TA_UB / (2.0 * TA_R * TA_C[1]),  # -(Ub / (R2/R1 + 1)) / (R3 C2)
+        -24.9757667,
+        -24.9757667,
+        -TA_UB / (2.0 * TA_R * TA_C[3]),  # -(Ub / (R6/R5 + 1)) / (R7 C4)
+        -10.00564453,
+        -10.00564453,
+    ]
+)
+TRANSAMP_REF = np.array(
+    [
+        -0.5562145012262709e-2,
+        0.3006522471903042e1,
+        0.2849958788608128e1,
+        0.2926422536206241e1,
+        0.2704617865010554e1,
+        0.2761837778393145e1,
+        0.4770927631616772e1,
+        0.1236995868091548e1,
+    ]
+)
+
+
+def transamp(t, y, yp):
+    """Kirchhoff's current law at the 8 nodes [A]: F = M y' - f(t, y) (node voltages y [V])."""
+    c1, c2, c3, c4, c5 = TA_C
+    ue = 0.1 * np.sin(200.0 * np.pi * t)
+    fac1 = TA_BETA * (np.exp((y[1] - y[2]) / TA_UF) - 1.0)
+    fac2 = TA_BETA * (np.exp((y[4] - y[5]) / TA_UF) - 1.0)
+    r = TA_R
+    return np.array(
+        [
+            (y[0] - ue) / TA_R0 + c1 * (yp[0] - yp[1]),
+            y[1] / r + (y[1] - TA_UB) / r + (1.0 - TA_ALPHA) * fac1 - c1 * (yp[0] - yp[1]),
+            y[2] / r - fac1 + c2 * yp[2],
+            (y[3] - TA_UB) / r + TA_ALPHA * fac1 + c3 * (yp[3] - yp[4]),
+            y[4] / r + (y[4] - TA_UB) / r + (1.0 - TA_ALPHA) * fac2 - c3 * (yp[3] - yp[4]),
+            y[5] / r - fac2 + c4 * yp[5],
+            (y[6] - TA_UB) / r + TA_ALPHA * fac2 + c5 * (yp[6] - yp[7]),
+            y[7] / r - c5 * (yp[6] - yp[7]),
+        ]
+    )

@@ -229,3 +229,21 @@ def test_excluding_algebraic_components_from_the_error_test():
     # ... and y6 = ks y1 y4 still follows the differential ones: the answer keeps the
     # 3.5 digits an atol of 1e-6 allows on y4 ~ 4e-4 (the run with y6 counted: ~4).
     assert significant_digits(excluded.y[:, -1], AKZO_REF) >= 3.5
+
+
+def test_transistor_amplifier_runs_to_the_end_at_least_as_accurate_as_ida():
+    """Test Set TRANSAMP: index 1, singular non-diagonal M, 100 Hz input; reference y(0.2)."""
+    from problems import TRANSAMP_REF, TRANSAMP_T_END, TRANSAMP_Y0, TRANSAMP_YP0, transamp
+
+    from dnasim.testing.ida import solve_with_ida
+
+    rtol = 1e-6
+    args = (transamp, (0, TRANSAMP_T_END), TRANSAMP_Y0, TRANSAMP_YP0)
+    # The published initial values are consistent; no component is purely algebraic.
+    ours = solve_dae(*args, rtol=rtol, atol=rtol, calc_initial=False, dense_output=False)
+    ida = solve_with_ida(*args, rtol=rtol, atol=rtol)
+    assert ours.success and ours.t[-1] == TRANSAMP_T_END
+    # At equal tolerance, at least IDA's significant digits at t_end (both ~5 here).
+    assert significant_digits(ours.y[:, -1], TRANSAMP_REF) >= significant_digits(
+        ida.y[:, -1], TRANSAMP_REF
+    )

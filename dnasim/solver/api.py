@@ -10,6 +10,8 @@ It validates the input, makes the initial values consistent, and steps with
   step's interpolant (``events.locate_zero``), cuts the step there, runs the
   switch's action, makes the state consistent again and restarts at order 1
   (the seed's Fig. 10.7); several switches in one step: the earliest wins;
+  a vector switch (many elements, one call per step) brackets only the elements
+  that changed sign and locates the earliest (``events.locate_earliest``);
 - emits the output points (every step, or ``t_eval``) to the result and to an
   optional ``callback`` that can stream them to disk.
 """
@@ -17,14 +19,16 @@ It validates the input, makes the initial values consistent, and steps with
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from dnasim.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
 from dnasim.solver.bdf import CountedResidual, NordsieckBDF, SolverStats
-from dnasim.solver.events import SwitchFunction, locate_zero
-from dnasim.solver.initial import detect_algebraic, make_consistent
+from dnasim.solver.callbacks import call_user
+from dnasim.solver.events import SwitchFunction, locate_earliest, locate_zero
+from dnasim.solver.initial import detect_algebraic, solve_consistent
 from dnasim.solver.linear_algebra import IterationMatrix
 from dnasim.solver.result import DAEResult, NordsieckSolution
 
@@ -52,8 +56,11 @@ def solve_dae(
     exclude_algebraic_from_error: bool = False,
     callback: Callable | None = None,
     variable_names: Sequence[str] | None = None,
+    equation_names: Sequence[str] | None = None,
     dense_output: bool = True,
     max_steps: int = 500_000,
+    output_interval: float | None = None,
+    keep_output: bool = True,
 ) -> DAEResult:
     """Solve the index-1 DAE F(t, y, y') = 0 from t_span[0] to t_span[1].
 
@@ -75,17 +82,33 @@ def solve_dae(
     jac : optional jac(t, y, yp, cj) -> dF/dy + cj dF/dy', dense or sparse.
     jac_sparsity : optional pattern of dF/dy + dF/dy'; finite differences are
         then grouped by column colouring and the LU is sparse.
-    events : switch functions g(t, y, yp) -> float, with optional attributes
-        ``direction`` (-1, 0, 1), ``terminal`` (bool), ``action(t, y, yp)``
+    events : switch functions, scalar or vector (see ``dnasim.solver.events``).
+        Scalar: g(t, y, yp) -> float, with optional attributes ``direction``
+        (-1, 0, 1), ``terminal`` (bool), ``restart`` (bool), ``action(t, y, yp)``
         returning new (y, yp) or None, and ``name``.
+        Vector: an object with an integer attribute ``size``, called once per
+        step as g(t, y, yp) -> array of shape (size,); ``direction`` a scalar or
+        an array of -1/0/+1, ``names`` (size strings), ``terminal``, ``restart``
+        and optional ``action(t, y, yp, which)``, ``which`` the int array of the
+        elements that crossed at the located time. A switch with an action, or
+        terminal, or with ``restart = True`` cuts the step at its earliest
+        crossing, is made consistent there and restarts at order 1; otherwise its
+        crossings are only located and logged. The event log names the element.
     tstops : known discontinuity times, hit exactly; restart at order 1.
-    t_eval : output times (default: every accepted step).
+    t_eval : output times (default: every accepted step). With output times, both
+        sides of every restart (tstop, located switch) are output points too: two
+        points at the same t, the state before and after the discontinuity.
+    output_interval : output times t0, t0 + dt, ..., t_end generated as the
+        integration reaches them (no grid is allocated); not with ``t_eval``.
     calc_initial : make (y0, yp0) consistent first (keep the differential y0).
     exclude_algebraic_from_error : leave algebraic components out of the error test.
     callback : callback(t, y, yp) for every output point, in order (streaming).
-    variable_names : names of the components, used in error messages.
+    variable_names : names of the unknowns y_i ("water.flow"), used in error messages.
+    equation_names : names of the equations F_i ("water.mass"), used in error messages.
     dense_output : keep the Nordsieck polynomials for ``result.sol(t)``.
     max_steps : give up after this many steps.
+    keep_output : False: output points go to ``callback`` only and are not kept
+        in the result (``result.t`` is then empty): memory does not grow with them.
 
     Returns
     -------
@@ -108,57 +131,34 @@ def solve_dae(
         tstops,
         t_eval,
         variable_names,
+        equation_names,
     )
     stats = SolverStats()
     F = CountedResidual(residual, problem.n, stats)
-    matrix = IterationMatrix(F, problem.n, jac, problem.sparsity, variable_names)
+    matrix = IterationMatrix(F, problem.n, jac, problem.sparsity, variable_names, equation_names)
     t0, t_end = problem.t0, problem.t_end
     y, yp = problem.y0, problem.yp0
-    try:
-        F(t0, y, yp)
-    except ResidualDomainError as exc:
-        raise DAEError(f"The residual cannot be evaluated at the initial values: {exc}") from None
-    algebraic_mask = problem.algebraic
-    if algebraic_mask is None:
-        algebraic_mask = detect_algebraic(F, t0, y, yp, matrix)
-    error_mask = np.ones(problem.n)
-    if exclude_algebraic_from_error:
-        error_mask[algebraic_mask] = 0.0
-    span = t_end - t0
-    ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
-    weights = 1.0 / (rtol * np.abs(y) + problem.atol)
-
-    def consistent(t, y, yp):
-        return make_consistent(F, t, y, yp, algebraic_mask, weights, ic_scale, matrix)
-
-    if calc_initial:
-        y, yp = consistent(t0, y, yp)
-    solver = NordsieckBDF(
-        F,
-        t0,
-        y,
-        yp,
-        rtol=rtol,
-        atol=problem.atol,
-        max_order=max_order,
-        h0=h0,
-        max_step=max_step,
-        error_mask=error_mask,
-        matrix=matrix,
-        stats=stats,
-        t_scale=span,
-        names=variable_names,
-    )
-    out = _Output(problem.t_eval, callback, dense_output, t0)
-    out.initial(t0, y, yp)
+    grid = None
+    if problem.t_eval is not None and output_interval is not None:
+        raise DAEError("give t_eval or output_interval, not both.")
+    if problem.t_eval is not None:
+        grid = _Grid(t_eval=problem.t_eval)
+    elif output_interval is not None:
+        dt = output_interval
+        if isinstance(dt, bool) or not (
+            isinstance(dt, (int, float, np.integer, np.floating)) and np.isfinite(dt) and dt > 0
+        ):
+            raise DAEError(f"output_interval must be a positive number; got {dt!r}.")
+        grid = _Grid(interval=float(dt), t0=t0, t_end=t_end)
+    out = _Output(grid, callback, dense_output, t0, keep=keep_output)
     switches = [SwitchFunction.wrap(g, i) for i, g in enumerate(events)]
-    g_old = [sw.value(t0, y, yp) for sw in switches]
     event_log: list[dict] = []
     t_events: list[list] = [[] for _ in switches]
     y_events: list[list] = [[] for _ in switches]
     stops = [s for s in problem.tstops if t0 < s < t_end]
     status, message = 0, "The solver reached the end of the interval."
     restarts_here, last_restart_t = 0, None
+    solver = None
 
     def partial_result(success, status, message):
         return DAEResult(
@@ -175,6 +175,60 @@ def solve_dae(
         )
 
     try:
+        try:
+            F(t0, y, yp)
+        except ResidualDomainError as exc:
+            raise DAEError(
+                f"The residual cannot be evaluated at the initial values: {exc}"
+            ) from None
+        algebraic_mask = problem.algebraic
+        if algebraic_mask is None:
+            algebraic_mask = detect_algebraic(F, t0, y, yp, matrix)
+        error_mask = np.ones(problem.n)
+        if exclude_algebraic_from_error:
+            error_mask[algebraic_mask] = 0.0
+        span = t_end - t0
+        ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
+
+        def consistent(t, y, yp, what):
+            yp = np.array(yp, dtype=float)
+            yp[algebraic_mask] = 0.0  # not determined by F; the predictor starts them flat
+            return solve_consistent(
+                F,
+                t,
+                y,
+                yp,
+                algebraic_mask,
+                rtol=rtol,
+                atol=problem.atol,
+                h_scale=ic_scale,
+                matrix=matrix,
+                variable_names=variable_names,
+                equation_names=equation_names,
+                what=what,
+            )
+
+        if calc_initial:
+            y, yp = consistent(t0, y, yp, "the initial values")
+        solver = NordsieckBDF(
+            F,
+            t0,
+            y,
+            yp,
+            rtol=rtol,
+            atol=problem.atol,
+            max_order=max_order,
+            h0=h0,
+            max_step=max_step,
+            error_mask=error_mask,
+            matrix=matrix,
+            stats=stats,
+            t_scale=span,
+            names=variable_names,
+            equation_names=equation_names,
+        )
+        out.initial(t0, y, yp)
+        g_old = [sw.value(t0, y, yp) for sw in switches]
         while solver.t < t_end:
             if stats.steps >= max_steps:
                 raise DAEError(
@@ -185,45 +239,47 @@ def solve_dae(
             t_prev = solver.t
             solver.step(next_stop, left_limit=next_stop < t_end)
             g_new = [sw.value(solver.t, solver.y, solver.yp) for sw in switches]
-            cut = _earliest_crossing(solver, switches, g_old, g_new, t_prev)
-            for k, t_star, y_star, _yp_star, _g_star, iterates, _restarting in cut:
-                sw = switches[k]
-                event_log.append(
-                    {
-                        "event": k,
-                        "name": sw.name,
-                        "t": t_star,
-                        "iterates": iterates,
-                        "terminal": sw.terminal,
-                    }
-                )
-                t_events[k].append(t_star)
-                y_events[k].append(y_star)
-            if cut and cut[-1][-1]:
-                k, t_star, y_star, yp_star, g_star, iterates, _ = cut[-1]
-                sw = switches[k]
+            cut = _crossings(solver, switches, g_old, g_new, t_prev)
+            for c in cut:
+                sw = switches[c.switch]
+                for j in c.which:
+                    event_log.append(
+                        {
+                            "event": c.switch,
+                            "name": sw.names[j],
+                            "element": int(j),
+                            "t": c.t,
+                            "iterates": c.iterates if j == c.located else [],
+                            "terminal": sw.terminal,
+                        }
+                    )
+                    t_events[c.switch].append(c.t)
+                    y_events[c.switch].append(c.y)
+            if cut and cut[-1].restarts:
+                c = cut[-1]
+                sw = switches[c.switch]
+                t_star = c.t
                 out.step(solver, t_prev, t_star)
                 if sw.terminal:
                     status, message = (
                         1,
-                        f"A terminal switch, {sw.name!r}, fired at t = {t_star:.10g}.",
+                        f"A terminal switch, {sw.names[c.located]!r}, fired at t = {t_star:.10g}.",
                     )
                     break
                 if t_star == last_restart_t:
                     restarts_here += 1
                     if restarts_here > MAX_RESTARTS_AT_ONE_TIME:
                         raise DAEError(
-                            f"The switch {sw.name!r} fires again and again at t = {t_star:.10g} "
-                            "(chattering): its action does not move the state to the other side."
+                            f"The switch {sw.names[c.located]!r} fires again and again at "
+                            f"t = {t_star:.10g} (chattering): its action does not move the state "
+                            "to the other side."
                         )
                 else:
                     restarts_here, last_restart_t = 0, t_star
-                y_new, yp_new = y_star, yp_star
-                if sw.action is not None:
-                    changed = sw.action(t_star, y_star.copy(), yp_star.copy())
-                    if changed is not None:
-                        y_new, yp_new = (np.asarray(v, dtype=float) for v in changed)
-                y_new, yp_new = consistent(t_star, y_new, yp_new)
+                y_new, yp_new = _run_action(sw, c, problem.n)
+                y_new, yp_new = consistent(
+                    t_star, y_new, yp_new, f"the values after the switch {sw.names[c.located]!r}"
+                )
                 solver.restart(t_star, y_new, yp_new)
                 out.restart(t_star, y_new, yp_new)
                 g_old = [sw.value(t_star, y_new, yp_new) for sw in switches]
@@ -232,7 +288,9 @@ def solve_dae(
             g_old = g_new
             if stops and solver.t == stops[0]:
                 stops.pop(0)
-                y_new, yp_new = consistent(solver.t, solver.y, solver.yp)
+                y_new, yp_new = consistent(
+                    solver.t, solver.y, solver.yp, "the values after the time event (tstop)"
+                )
                 solver.restart(solver.t, y_new, yp_new)
                 out.restart(solver.t, y_new, yp_new)
                 g_old = [sw.value(solver.t, y_new, yp_new) for sw in switches]
@@ -240,70 +298,173 @@ def solve_dae(
         result = partial_result(False, -1, str(exc))
         error = DAEError(str(exc))
         error.result = result
-        raise error from None
+        raise error from exc.__cause__
     except KeyboardInterrupt as exc:
         # Ctrl-C: hand the caller what was computed (it may write it to disk).
-        exc.result = partial_result(False, -2, f"Interrupted at t = {solver.t:.10g}.")
+        t_reached = solver.t if solver is not None else t0
+        exc.result = partial_result(False, -2, f"Interrupted at t = {t_reached:.10g}.")
         raise
     return partial_result(True, status, message)
 
 
-def _earliest_crossing(solver, switches, g_old, g_new, t_prev):
+@dataclass
+class _Crossing:
+    """A located crossing in the last step: switch index, time, state, elements."""
+
+    switch: int
+    t: float
+    y: np.ndarray
+    yp: np.ndarray
+    which: np.ndarray  # the elements that crossed at t (one for a scalar switch)
+    located: int  # the element whose zero was located (the iterates are its)
+    iterates: list
+    restarts: bool
+
+
+def _crossings(solver, switches, g_old, g_new, t_prev) -> list[_Crossing]:
     """Locate the crossings in the last step; return those up to the first that restarts.
 
-    Each entry: (switch index, t*, y*, y'*, g(t*), iterates, restarts). Crossings
-    of observing switches (no action, not terminal) before the first restarting
-    one are all returned; later ones are dropped (they are found again).
+    A restarting switch (terminal, with an action or ``restart``) gives its
+    earliest crossing only (elements crossing at the same located time are
+    reported together); an observing switch gives every crossed element, each
+    located on its own. Crossings of observing switches before the first
+    restarting one are all returned; later ones are dropped (found again after
+    the restart).
     """
     found = []
     for k, sw in enumerate(switches):
-        if not sw.crossed(g_old[k], g_new[k]):
+        crossed = sw.crossed(g_old[k], g_new[k])
+        if not crossed.any():
             continue
 
-        def g_of_t(t, sw=sw):
+        def values(t, sw=sw):
             y, yp = solver.interpolate(t)
             return sw.value(t, y, yp)
 
-        t_star, g_star, iterates = locate_zero(g_of_t, t_prev, g_old[k], solver.t, g_new[k])
-        y_star, yp_star = solver.interpolate(t_star)
-        restarts = sw.terminal or sw.action is not None
-        found.append((k, t_star, y_star, yp_star, g_star, iterates, restarts))
-    found.sort(key=lambda c: c[1])
+        if sw.restarts:
+            t_star, _, which, j, iterates = locate_earliest(
+                values, sw, t_prev, g_old[k], solver.t, g_new[k]
+            )
+            y_star, yp_star = solver.interpolate(t_star)
+            found.append(_Crossing(k, t_star, y_star, yp_star, which, j, iterates, True))
+            continue
+        for j in np.flatnonzero(crossed):
+
+            def element(t, values=values, j=j):
+                return float(values(t)[j])
+
+            t_star, _, iterates, _ = locate_zero(
+                element, t_prev, g_old[k][j], solver.t, g_new[k][j]
+            )
+            y_star, yp_star = solver.interpolate(t_star)
+            found.append(
+                _Crossing(k, t_star, y_star, yp_star, np.array([j]), int(j), iterates, False)
+            )
+    found.sort(key=lambda c: c.t)
     result = []
     for c in found:
         result.append(c)
-        if c[-1]:
+        if c.restarts:
             break
     return result
 
 
-class _Output:
-    """Collects output points (and dense-output pieces) and forwards them to the callback."""
+def _run_action(sw, c: _Crossing, n: int):
+    """The switch's action at the crossing: new (y, yp), checked, or the located state."""
+    if sw.action is None:
+        return c.y, c.yp
+    args = (c.t, c.y.copy(), c.yp.copy()) + ((c.which.copy(),) if sw.vector else ())
+    changed = call_user(sw.action, f"the action of switch {sw.name!r}", c.t, *args)
+    if changed is None:
+        return c.y, c.yp
+    try:
+        y_new, yp_new = changed
+        y_new = np.asarray(y_new, dtype=float)
+        yp_new = np.asarray(yp_new, dtype=float)
+    except (TypeError, ValueError):
+        raise DAEError(
+            f"The action of switch {sw.name!r} returned {type(changed).__name__}; it must "
+            f"return None or a pair (y, yp) of arrays of {n} numbers."
+        ) from None
+    if y_new.shape != (n,) or yp_new.shape != (n,):
+        raise DAEError(
+            f"The action of switch {sw.name!r} returned arrays of shapes {y_new.shape} and "
+            f"{yp_new.shape}; it must return None or (y, yp) of shape ({n},) each."
+        )
+    if not (np.all(np.isfinite(y_new)) and np.all(np.isfinite(yp_new))):
+        raise DAEError(f"The action of switch {sw.name!r} returned NaN or inf at t = {c.t:.10g}.")
+    return y_new, yp_new
 
-    def __init__(self, t_eval, callback, dense_output, t0):
-        self.t_eval = t_eval
-        self.next_eval = 0
+
+class _Grid:
+    """Output times, consumed in order: an array (``t_eval``) or the lazy grid
+    t0 + k dt, k = 0, 1, ..., closed by t_end (``output_interval``): nothing of
+    the size of the grid is allocated."""
+
+    def __init__(self, t_eval=None, interval=None, t0=0.0, t_end=0.0):
+        self.array = t_eval
+        self.interval = interval
+        self.t0, self.t_end = t0, t_end
+        self.k = 0
+        self.done = False
+
+    def peek(self) -> float | None:
+        if self.array is not None:
+            return float(self.array[self.k]) if self.k < len(self.array) else None
+        if self.done:
+            return None
+        t = self.t0 + self.k * self.interval
+        if t >= self.t_end - 1e-9 * (self.t_end - self.t0):
+            return self.t_end
+        return t
+
+    def advance(self) -> None:
+        if self.array is None and self.peek() == self.t_end:
+            self.done = True
+        self.k += 1
+
+
+class _Output:
+    """Collects output points (and dense-output pieces) and forwards them to the callback.
+
+    Without output times every accepted step is an output point, and after a
+    restart (tstop or located switch) the state right after it is a second point
+    at the same t. With output times (``t_eval`` or ``output_interval``) both
+    sides of every restart are output points as well (two points at the same t), so
+    that integrals over the output are exact across the discontinuity.
+    ``keep=False``: points go to the callback only and nothing grows with them.
+    """
+
+    def __init__(self, grid, callback, dense_output, t0, keep=True):
+        self.grid = grid
         self.callback = callback
         self.dense = dense_output
+        self.keep = keep
         self.t, self.y, self.yp = [], [], []
         self.history = []
         self.pieces = []
         self.t0 = t0
+        self.last_t = None
+        self.left = None  # (t, y, yp) at the end of the last step, for a restart there
 
     def _emit(self, t, y, yp):
-        self.t.append(t)
-        self.y.append(np.array(y))
-        self.yp.append(np.array(yp))
+        if self.keep:
+            self.t.append(t)
+            self.y.append(np.array(y))
+            self.yp.append(np.array(yp))
+        self.last_t = t
         if self.callback is not None:
-            self.callback(t, y, yp)
+            call_user(self.callback, "the output callback", t, t, y, yp)
 
     def initial(self, t, y, yp):
-        if self.t_eval is None:
+        if self.grid is None:
             self._emit(t, y, yp)
-        else:
-            while self.next_eval < len(self.t_eval) and self.t_eval[self.next_eval] <= t:
-                self._emit(self.t_eval[self.next_eval], y, yp)
-                self.next_eval += 1
+            return
+        te = self.grid.peek()
+        while te is not None and te <= t:
+            self._emit(te, y, yp)
+            self.grid.advance()
+            te = self.grid.peek()
 
     def step(self, solver, t_prev, t_until):
         """Output of the step just taken, on (t_prev, t_until] (t_until <= solver.t)."""
@@ -311,24 +472,28 @@ class _Output:
         if self.dense:
             t_ref, h, q, z = solver.nordsieck_snapshot()
             self.pieces.append((t_until, t_ref, h, q, z))
-        if self.t_eval is None:
-            if t_until == solver.t:
-                self._emit(t_until, solver.y, solver.yp)
-            else:
-                self._emit(t_until, *solver.interpolate(t_until))
+        if t_until == solver.t:
+            self.left = (t_until, solver.y, solver.yp)
+        else:
+            self.left = (t_until, *solver.interpolate(t_until))
+        if self.grid is None:
+            self._emit(*self.left)
             return
-        while self.next_eval < len(self.t_eval) and self.t_eval[self.next_eval] <= t_until:
-            te = self.t_eval[self.next_eval]
-            if te == solver.t:
-                self._emit(te, solver.y, solver.yp)
+        te = self.grid.peek()
+        while te is not None and te <= t_until:
+            if te == t_until:
+                self._emit(*self.left)
             else:
                 self._emit(te, *solver.interpolate(te))
-            self.next_eval += 1
+            self.grid.advance()
+            te = self.grid.peek()
 
     def restart(self, t, y, yp):
-        """After a discontinuity: the state right after it (an extra point at the same t)."""
-        if self.t_eval is None:
-            self._emit(t, y, yp)
+        """After a discontinuity at t: the state right after it, an extra point at the
+        same t (with output times, preceded by the state right before it)."""
+        if self.grid is not None and self.last_t != t and self.left is not None:
+            self._emit(*self.left)
+        self._emit(t, y, yp)
 
     def arrays(self, n):
         if not self.t:
@@ -363,23 +528,24 @@ class _Problem:
         tstops,
         t_eval,
         names,
+        equation_names=None,
     ):
         p = cls()
         if not callable(residual):
             raise DAEError("residual must be a function F(t, y, yp) -> array.")
-        try:
-            t0, t_end = (float(v) for v in t_span)
-        except (TypeError, ValueError):
-            raise DAEError(f"t_span must be two numbers (t0, t_end); got {t_span!r}.") from None
+        span = _real_array(t_span, "t_span").ravel()
+        if span.size != 2:
+            raise DAEError(f"t_span must be two numbers (t0, t_end); got {t_span!r}.")
+        t0, t_end = float(span[0]), float(span[1])
         if not (np.isfinite(t0) and np.isfinite(t_end)) or t_end <= t0:
             raise DAEError(f"t_span must be finite with t_end > t0; got ({t0}, {t_end}).")
         p.t0, p.t_end = t0, t_end
         p.y0 = _vector(y0, "y0")
         p.n = n = p.y0.size
         p.yp0 = np.zeros(n) if yp0 is None else _vector(yp0, "yp0", n)
-        if not (np.isscalar(rtol) and np.isfinite(rtol) and 0.0 < rtol < 1.0):
+        if not (_is_real(rtol) and np.isfinite(rtol) and 0.0 < rtol < 1.0):
             raise DAEError(f"rtol must be one number between 0 and 1; got {rtol!r}.")
-        a = np.asarray(atol, dtype=float)
+        a = _real_array(atol, "atol")
         if a.ndim == 0:
             a = np.full(n, float(a))
         if a.shape != (n,) or not np.all(np.isfinite(a)) or np.any(a <= 0.0):
@@ -390,9 +556,9 @@ class _Problem:
         p.atol = a
         if max_order not in (1, 2, 3, 4, 5):
             raise DAEError(f"max_order must be 1, 2, 3, 4 or 5; got {max_order!r}.")
-        if h0 is not None and not (np.isfinite(h0) and h0 > 0):
+        if h0 is not None and not (_is_real(h0) and np.isfinite(h0) and h0 > 0):
             raise DAEError(f"h0 must be a positive number; got {h0!r}.")
-        if not max_step > 0:
+        if not (_is_real(max_step) and max_step > 0):
             raise DAEError(f"max_step must be positive; got {max_step!r}.")
         p.algebraic = None
         if algebraic is not None:
@@ -414,12 +580,15 @@ class _Problem:
             raise DAEError(
                 f"jac_sparsity must have shape ({n}, {n}); got {getattr(sparsity, 'shape', None)}."
             )
-        p.tstops = sorted(float(s) for s in np.atleast_1d(np.asarray(tstops, dtype=float)))
+        p.tstops = sorted(float(s) for s in np.atleast_1d(_real_array(tstops, "tstops")))
         if any(not np.isfinite(s) for s in p.tstops):
             raise DAEError("tstops must be finite times.")
         p.t_eval = None
         if t_eval is not None:
-            te = np.asarray(t_eval, dtype=float).ravel()
+            te = _real_array(t_eval, "t_eval").ravel()
+            if not np.all(np.isfinite(te)):
+                bad = np.flatnonzero(~np.isfinite(te))[:5].tolist()
+                raise DAEError(f"t_eval holds NaN or inf at index(es) {bad}.")
             if np.any(np.diff(te) < 0) or te.size == 0:
                 raise DAEError("t_eval must be a non-empty, increasing sequence of times.")
             if te[0] < t0 or te[-1] > t_end:
@@ -427,16 +596,33 @@ class _Problem:
             p.t_eval = te
         if names is not None and len(names) != n:
             raise DAEError(f"variable_names has {len(names)} names for {n} unknowns.")
+        if equation_names is not None and len(equation_names) != n:
+            raise DAEError(f"equation_names has {len(equation_names)} names for {n} equations.")
         for i, g in enumerate(events):
             SwitchFunction.wrap(g, i)
         return p
 
 
-def _vector(v, what, n=None) -> np.ndarray:
+def _is_real(v) -> bool:
+    """A real number (bool excluded), as Python or numpy scalar."""
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _real_array(v, what) -> np.ndarray:
+    """v as a float array; strings, complex numbers, None or objects are refused."""
     try:
-        arr = np.array(v, dtype=float)
+        raw = np.asarray(v)
     except (TypeError, ValueError):
-        raise DAEError(f"{what} must be an array of numbers.") from None
+        raise DAEError(f"{what} must be an array of real numbers.") from None
+    if raw.dtype.kind not in "biuf":
+        kinds = {"U": "strings", "S": "bytes", "c": "complex numbers", "O": "non-numbers"}
+        got = kinds.get(raw.dtype.kind, f"values of type {raw.dtype}")
+        raise DAEError(f"{what} must hold real numbers; it holds {got}.")
+    return raw.astype(float)
+
+
+def _vector(v, what, n=None) -> np.ndarray:
+    arr = np.array(_real_array(v, what), dtype=float)
     if arr.ndim != 1 or arr.size == 0:
         raise DAEError(f"{what} must be a one-dimensional array; got shape {arr.shape}.")
     if n is not None and arr.size != n:

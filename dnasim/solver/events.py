@@ -16,11 +16,12 @@ switch has changed its sign"). Every iterate (t, g) is recorded.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from dnasim.errors import DAEError
+from dnasim.solver.callbacks import call_user
 
 EPS = float(np.finfo(float).eps)
 MAX_ITERATIONS = 100
@@ -28,55 +29,138 @@ MAX_ITERATIONS = 100
 
 @dataclass
 class SwitchFunction:
-    """A user's switch function with its attributes made explicit."""
+    """A user's switch function, scalar or vector, with its attributes made explicit.
+
+    Scalar: g(t, y, yp) -> float, with optional ``direction`` (-1, 0, +1),
+    ``terminal``, ``restart``, ``action(t, y, yp)`` and ``name``.
+
+    Vector: an object with an integer attribute ``size``; g(t, y, yp) -> array of
+    shape (size,); ``direction`` a scalar or an array of -1/0/+1 per element,
+    ``names`` (size strings), ``terminal``, ``restart`` and an optional
+    ``action(t, y, yp, which)`` with ``which`` the int array of the elements that
+    crossed at the located time.
+
+    A switch *restarts* (cut the step at the crossing, make consistent, restart
+    at order 1) when it is terminal, has an action, or has ``restart = True``;
+    otherwise it only observes (its crossings are located and logged).
+    """
 
     g: Callable
     index: int
     name: str
-    direction: int  # +1: only rising (- to +), -1: only falling, 0: both
+    direction: np.ndarray  # per element: +1 only rising (- to +), -1 only falling, 0 both
     terminal: bool
     action: Callable | None
+    size: int = 1
+    vector: bool = False
+    names: list = field(default_factory=list)
+    restart_only: bool = False
 
     @classmethod
     def wrap(cls, g, index) -> SwitchFunction:
         if not callable(g):
             raise DAEError(f"events[{index}] is not callable; a switch function is g(t, y, yp).")
-        direction = int(np.sign(getattr(g, "direction", 0) or 0))
         name = getattr(g, "name", None) or getattr(g, "__name__", None) or f"event{index}"
+        name = str(name)
+        size = getattr(g, "size", None)
+        vector = size is not None
+        if vector:
+            if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
+                raise DAEError(
+                    f"events[{index}] ({name!r}).size must be a positive integer; got {size!r}."
+                )
+            size = int(size)
+        else:
+            size = 1
+        try:
+            direction = np.sign(
+                np.broadcast_to(
+                    np.asarray(_or_zero(getattr(g, "direction", None)), dtype=float), (size,)
+                )
+            ).astype(int)
+        except (TypeError, ValueError):
+            raise DAEError(
+                f"events[{index}] ({name!r}).direction must be -1, 0, 1 or {size} such values."
+            ) from None
+        names = getattr(g, "names", None)
+        if vector:
+            if names is None:
+                names = [f"{name}[{j}]" for j in range(size)]
+            names = [str(v) for v in names]
+            if len(names) != size:
+                raise DAEError(
+                    f"events[{index}] ({name!r}) has size {size} but {len(names)} names."
+                )
+        else:
+            names = [name]
         action = getattr(g, "action", None)
         if action is not None and not callable(action):
             raise DAEError(f"events[{index}].action is not callable.")
-        return cls(g, index, str(name), direction, bool(getattr(g, "terminal", False)), action)
+        return cls(
+            g,
+            index,
+            name,
+            direction,
+            bool(getattr(g, "terminal", False)),
+            action,
+            size,
+            vector,
+            names,
+            bool(getattr(g, "restart", False)),
+        )
 
-    def value(self, t, y, yp) -> float:
-        v = self.g(t, y, yp)
+    @property
+    def restarts(self) -> bool:
+        """Cut the step at a crossing and restart at order 1 there."""
+        return self.terminal or self.action is not None or self.restart_only
+
+    def value(self, t, y, yp) -> np.ndarray:
+        """g(t, y, yp) as an array of shape (size,) (one call of the user's function)."""
+        v = call_user(self.g, f"the switch function {self.name!r}", t, t, y, yp)
         try:
-            v = float(v)
+            v = np.asarray(v, dtype=float)
         except (TypeError, ValueError):
             raise DAEError(
-                f"Switch function {self.name!r} returned {v!r}; it must return one number."
+                f"Switch function {self.name!r} returned {v!r}; it must return "
+                + (f"{self.size} numbers." if self.vector else "one number.")
             ) from None
-        if not np.isfinite(v):
-            raise DAEError(f"Switch function {self.name!r} returned {v} at t = {t:.10g}.")
+        if v.size != self.size or (self.vector and v.ndim > 1):
+            raise DAEError(
+                f"Switch function {self.name!r} returned shape {v.shape}; it must return "
+                + (f"shape ({self.size},)." if self.vector else "one number.")
+            )
+        v = v.reshape(self.size)
+        if not np.all(np.isfinite(v)):
+            bad = int(np.flatnonzero(~np.isfinite(v))[0])
+            raise DAEError(
+                f"Switch function {self.names[bad]!r} returned {v[bad]} at t = {t:.10g}."
+            )
         return v
 
-    def crossed(self, g_old: float, g_new: float) -> bool:
-        """A sign change from g_old to g_new that this function's direction reports."""
-        if g_old == 0.0 or np.sign(g_old) == np.sign(g_new):
-            return False
-        if g_new == 0.0:
-            return False  # not across yet; seen on the next step
+    def crossed(self, g_old: np.ndarray, g_new: np.ndarray) -> np.ndarray:
+        """Per element: a sign change from g_old to g_new that its direction reports.
+
+        No change when g_old is exactly 0 (it left the switch) or g_new is exactly 0
+        (not across yet; seen on the next step).
+        """
+        change = (g_old != 0.0) & (g_new != 0.0) & (np.sign(g_old) != np.sign(g_new))
         rising = g_new > 0.0
-        return self.direction == 0 or (self.direction > 0) == rising
+        wanted = (self.direction == 0) | ((self.direction > 0) == rising)
+        return change & wanted
+
+
+def _or_zero(v):
+    return 0 if v is None else v
 
 
 def locate_zero(
     g: Callable[[float], float], t_a: float, g_a: float, t_b: float, g_b: float
-) -> tuple[float, float, list[tuple[float, float]]]:
+) -> tuple[float, float, list[tuple[float, float]], float]:
     """Zero of g between t_a (old sign) and t_b (new sign), by Brent's zeroin.
 
-    Returns (t_star, g(t_star), iterates) with t_star on the new side of the
-    switch (sign of g_b, or g = 0), within a few ulp of the true crossing.
+    Returns (t_star, g(t_star), iterates, t_old) with t_star on the new side of
+    the switch (sign of g_b, or g = 0), within a few ulp of the true crossing, and
+    t_old the other end of the final bracket (old side).
     """
     iterates = [(t_a, g_a), (t_b, g_b)]
     new_sign = np.sign(g_b)
@@ -121,9 +205,62 @@ def locate_zero(
         iterates.append((b, fb))
     # The bracket is [b, c] (or b is an exact zero). Return its end on the new side.
     if fb == 0.0 or np.sign(fb) == new_sign:
-        return b, fb, iterates
+        return b, fb, iterates, c
     if fc == 0.0 or np.sign(fc) == new_sign:
         if (c, fc) != iterates[-1]:
             iterates.append((c, fc))
-        return c, fc, iterates
+        return c, fc, iterates, b
     raise DAEError("internal error: the switch-function bracket was lost")  # pragma: no cover
+
+
+def locate_earliest(
+    values: Callable[[float], np.ndarray],
+    sw: SwitchFunction,
+    t_a: float,
+    g_a: np.ndarray,
+    t_b: float,
+    g_b: np.ndarray,
+) -> tuple[float, np.ndarray, np.ndarray, int, list]:
+    """The earliest crossing of a (vector) switch in (t_a, t_b].
+
+    ``values(t)`` returns the whole vector g at t on the step's interpolant (one
+    call of the user's function). Only elements that changed sign are bracketed:
+    the one whose linear interpolation crosses first is located by
+    ``locate_zero``; if another element has already crossed at the old-side end
+    of the final bracket, the search repeats on the shorter interval.
+
+    Returns (t_star, g(t_star), which, located element, iterates of that element),
+    ``which`` the elements that crossed between t_a and t_star.
+    """
+    while True:
+        candidates = np.flatnonzero(sw.crossed(g_a, g_b))
+        ga, gb = g_a[candidates], g_b[candidates]
+        frac = ga / (ga - gb)
+        k = int(candidates[np.argmin(frac)])
+        cache: dict[float, np.ndarray] = {}
+
+        def scalar(t, k=k, cache=cache):
+            if t not in cache:
+                cache[t] = values(t)
+            return float(cache[t][k])
+
+        t_star, _, iterates, _ = locate_zero(scalar, t_a, g_a[k], t_b, g_b[k])
+        # The old-side end of the final bracket: the latest iterate before t_star whose
+        # value still has the old sign.
+        old_sign = np.sign(g_a[k])
+        t_old = max((t for t, v in iterates if t < t_star and np.sign(v) == old_sign), default=t_a)
+        g_star = cache[t_star] if t_star in cache else (g_b if t_star == t_b else values(t_star))
+        if t_old == t_a:
+            g_old = g_a
+        else:
+            g_old = cache[t_old] if t_old in cache else values(t_old)
+        earlier = sw.crossed(g_a, g_old)
+        if t_old != t_a and np.any(earlier):
+            t_b, g_b = t_old, g_old  # another element crossed before this bracket
+            continue
+        # Crossed by t_star: a sign change, or (for elements that change sign in the
+        # step) exactly zero there, like the located one may be.
+        at_zero = candidates[g_star[candidates] == 0.0]
+        which = np.union1d(np.flatnonzero(sw.crossed(g_a, g_star)), at_zero)
+        which = np.union1d(which, [k]).astype(int)
+        return t_star, g_star, which, k, iterates

@@ -1,29 +1,65 @@
-"""Consistent initial values for an index-1 DAE (as SUNDIALS IDACalcIC, YA_YDP_INIT).
+"""Consistent values of an index-1 DAE F(t, y, y') = 0: one routine for every start.
 
-Given the differential components of y, find the algebraic components of y and
-the derivatives y' of the differential components such that F(t0, y, y') = 0.
-The unknowns are u = (y_a, y'_d); the Jacobian dF/du takes the columns of
-dF/dy for the algebraic and of dF/dy' for the differential components. For an
-index-1 DAE it is nonsingular. The derivatives of the algebraic components are
-not determined by F; they are set to zero.
+``solve_consistent`` solves F(t, y, y') = 0 for a chosen set of unknowns: for
+each component i either y_i (``y_unknown[i]``) or y'_i is unknown, the other is
+kept. The cases in use:
 
-Newton's method with a backtracking line search on ||F||_2; convergence when
-the weighted RMS norm of the update is below 0.01 * 0.33 (IDA's epicfac * epcon),
-with y' updates weighted by a time scale h so they count as changes of y.
+- IDACalcIC's YA_YDP_INIT (start, tstops, events): y of the algebraic and y' of
+  the differential components are unknown;
+- a plant's steady start: every y unknown except the accumulators (running
+  integrals), whose y' is solved for instead.
+
+Unknowns and scales. With the weights w_i = 1 / (rtol |y_i| + atol_i),
+recomputed from the *current* iterate at every iteration (a component that was
+small at t0 must not get a round-off-level test later), an unknown y_i is
+measured by w_i and an unknown y'_i by h w_i (h a time scale: a change d of y'
+moves y by about h d over a step). ``uw`` below holds these unknown weights.
+
+Newton. The Jacobian dF/du takes the columns of dF/dy for the y unknowns and of
+dF/dy' for the y' unknowns; it is built by finite differences grouped by the
+column colouring of ``linear_algebra.IterationMatrix`` and factorised by LU. It
+is refreshed at every iteration. The Newton step d = -J^{-1} F is globalised by
+backtracking on the row-scaled residual psi(u) = || F(u) / r ||_2, with
+r_i = max_j |J_ij| / uw_j taken from the first iteration's Jacobian (each residual
+in tolerance units of the unknowns it sets): u + lam d is accepted when
+psi <= (1 - 1e-4 lam) psi(u), halving lam down to 1e-5. (IDA backtracks on the
+natural-level function ||J^{-1} F||; from a plant's rough steady-start guess that
+test stalled, or led the iterates into a region where a controller saturates and
+the Jacobian is singular, where psi converged: superheater_line.toml.)
+
+Convergence when, at the current iterate,
+
+- the scaled Newton step is small: ||d||_uw <= 0.01 * 0.33 (IDA's
+  epicfac * epcon: a hundredth of the corrector's tolerance), or
+- the step is at round-off: |d_j| <= 64 eps |u_j| for every j with
+  |d_j| uw_j > 0.0033, i.e. no representable progress is left, or
+- F is exactly zero.
+
+A line search that cannot reduce psi at a point already within the
+integrator's tolerance (||d||_uw <= 1) is accepted too: the leftover is
+round-off, and the BDF corrector absorbs it.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
 from dnasim.errors import DAEError, ResidualDomainError
 from dnasim.solver.linear_algebra import SQRT_EPS, IterationMatrix, SingularMatrixError
 
+EPS = float(np.finfo(float).eps)
 MAX_ITERS = 30
-TOLERANCE = 0.01 * 0.33
+TOLERANCE = 0.01 * 0.33  # IDA: epicfac * epcon
+ROUNDOFF_STEP = 64.0 * EPS
+LAMBDA_MIN = 1e-5
+ARMIJO = 1e-4
+WITHIN_TOLERANCE = 1.0
 
 
 def _evaluate(residual, t, y, yp):
+    """F(t, y, yp), or None when it is outside its domain or not finite."""
     try:
         f = residual(t, y, yp)
     except ResidualDomainError:
@@ -31,99 +67,222 @@ def _evaluate(residual, t, y, yp):
     return f if np.all(np.isfinite(f)) else None
 
 
-def make_consistent(
+def _norm(v: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(v * v))) if v.size else 0.0
+
+
+def var_name(names: Sequence[str] | None, i: int) -> str:
+    """'water.flow' when names are known, else 'y[4]'."""
+    if names is not None and i < len(names):
+        return str(names[i])
+    return f"y[{i}]"
+
+
+def eq_name(names: Sequence[str] | None, i: int) -> str:
+    """'water.mass' when names are known, else 'equation 4'."""
+    if names is not None and i < len(names):
+        return str(names[i])
+    return f"equation {i}"
+
+
+def solve_consistent(
     residual,
     t: float,
     y: np.ndarray,
     yp: np.ndarray,
-    algebraic: np.ndarray,
-    weights: np.ndarray,
+    y_unknown: np.ndarray,
+    *,
+    rtol: float,
+    atol: np.ndarray,
     h_scale: float,
     matrix: IterationMatrix,
-    names=None,
+    variable_names: Sequence[str] | None = None,
+    equation_names: Sequence[str] | None = None,
+    max_iters: int = MAX_ITERS,
+    what: str = "the initial values",
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Return (y, yp) with the differential y kept and F(t, y, yp) = 0 solved for the rest."""
+    """Return (y, yp) with F(t, y, yp) = 0, solved for y[y_unknown] and yp[~y_unknown].
+
+    residual : F(t, y, yp) -> array (n,) (may raise ResidualDomainError).
+    t : time [time unit of the problem]; y, yp : starting values (copied).
+    y_unknown : boolean mask, True where y_i is unknown, False where y'_i is.
+    rtol, atol : tolerances that define the weights 1 / (rtol |y| + atol).
+    h_scale : time scale that turns a y' change into a y change [time unit].
+    matrix : IterationMatrix of the residual (its colouring is used; its stored
+        matrix is cleared afterwards, so the integrator builds its own).
+    Raises DAEError naming the variables and equations on failure.
+    """
     y = np.array(y, dtype=float)
     yp = np.array(yp, dtype=float)
-    yp[algebraic] = 0.0
-    alg = algebraic.astype(float)
-    diff = 1.0 - alg
-    # Scale of each unknown: y weights for y_a, h * y weights for y'_d.
-    unknown_weights = weights * (alg + h_scale * diff)
+    y_unknown = np.asarray(y_unknown, dtype=bool)
+    ymask = y_unknown.astype(float)
+    ypmask = 1.0 - ymask
+    atol = np.broadcast_to(np.asarray(atol, dtype=float), y.shape)
     f = _evaluate(residual, t, y, yp)
     if f is None:
-        raise DAEError(_message(t, "the residual cannot be evaluated at the initial values", names))
-    last_problem = ""
-    for _ in range(MAX_ITERS):
-        u = np.where(algebraic, y, yp)
-        inc = np.maximum(SQRT_EPS * np.abs(u), 1.0 / unknown_weights)  # as IDA's DQ increments
-        inc = (u + inc) - u
-        jac = matrix.finite_difference(t, y, yp, f, inc, alg, diff)
-        matrix.matrix = jac
-        matrix.cj = None
-        try:
-            matrix.factorize()
-        except SingularMatrixError as exc:
-            raise DAEError(
-                _message(
-                    t,
-                    "the Jacobian of F with respect to the algebraic variables and the "
-                    f"derivatives of the differential ones is singular. {exc} If some variables "
-                    "are algebraic (their derivatives appear nowhere), pass them as `algebraic`.",
-                    names,
-                )
-            ) from None
-        du = matrix.solve(-f)
-        full_update = np.sqrt(np.mean((du * unknown_weights) ** 2))
-        if full_update <= TOLERANCE:
-            # Converged: the residual is at round-off level and the last correction tiny.
-            # (A line search is no use there: ||F|| is round-off noise.)
-            y = y + du * alg
-            yp = yp + du * diff
-            matrix.matrix = None
-            return y, yp
-        f_norm = np.linalg.norm(f)
-        step = 1.0
-        for _ in range(12):
-            y_new = y + step * du * alg
-            yp_new = yp + step * du * diff
-            f_new = _evaluate(residual, t, y_new, yp_new)
-            if f_new is not None and np.linalg.norm(f_new) <= (1.0 - 1e-4 * step) * f_norm + 1e-300:
+        raise DAEError(
+            _message(
+                t,
+                what,
+                "the residual cannot be evaluated (outside its domain or not finite) at the "
+                "starting values",
+                _nonfinite_equations(residual, t, y, yp, equation_names),
+            )
+        )
+    problem = ""
+    scaled = None
+    rows = None  # row scales of psi, fixed at the first iteration
+    uw = np.ones_like(y)
+    try:
+        for _ in range(max_iters):
+            if not np.any(f):
+                return y, yp
+            uw = 1.0 / (rtol * np.abs(y) + atol) * (ymask + h_scale * ypmask)
+            u = np.where(y_unknown, y, yp)
+            jac = _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix)
+            try:
+                matrix.factorize()
+            except SingularMatrixError as exc:
+                raise DAEError(
+                    _message(
+                        t,
+                        what,
+                        "the Jacobian of F with respect to the unknowns (y of the algebraic, y' "
+                        f"of the differential variables) is singular. {exc} If some variables "
+                        "are algebraic (their derivatives appear nowhere), pass them as "
+                        "`algebraic`",
+                    )
+                ) from None
+            scaled = _scaled_residuals(jac, f, uw)
+            d = matrix.solve(-f)
+            dw = d * uw
+            phi = _norm(dw)
+            if not np.isfinite(phi):
+                problem = "the Newton step is not finite"
                 break
-            if f_new is not None and step < 1.0 / 64 and np.linalg.norm(f_new) <= f_norm:
+            if phi <= TOLERANCE or _at_roundoff(d, dw, u):
+                return _update(y, yp, d, 1.0, ymask, ypmask)
+            # Backtracking on the row-scaled residual psi (see the module doc).
+            if rows is None:
+                rows = _row_scales(jac, uw)
+            psi = float(np.linalg.norm(f / rows))
+            lam = 1.0
+            while True:
+                y_new, yp_new = _update(y, yp, d, lam, ymask, ypmask)
+                f_new = _evaluate(residual, t, y_new, yp_new)
+                if f_new is not None:
+                    if float(np.linalg.norm(f_new / rows)) <= (1.0 - ARMIJO * lam) * psi:
+                        break
+                lam *= 0.5
+                if lam < LAMBDA_MIN:
+                    break
+            if lam < LAMBDA_MIN:
+                if phi <= WITHIN_TOLERANCE:
+                    # Within the integrator's tolerance and no descent left: round-off.
+                    return _update(y, yp, d, 1.0, ymask, ypmask)
+                problem = "the line search could not reduce the scaled residual"
                 break
-            step *= 0.5
+            y, yp, f = y_new, yp_new, f_new
         else:
-            last_problem = "the line search could not reduce the residual"
-            break
-        y, yp, f = y_new, yp_new, f_new
-        update = np.sqrt(np.mean((step * du * unknown_weights) ** 2))
-        if update <= TOLERANCE or np.linalg.norm(f) == 0.0:
-            matrix.matrix = None  # the solver must build its own iteration matrix
-            return y, yp
-    matrix.matrix = None
-    worst = np.argsort(-np.abs(f))[:4]
-    eqs = ", ".join(f"equation {i} (residual {f[i]:.3g})" for i in worst)
+            problem = f"Newton did not converge in {max_iters} iterations"
+        detail = _worst(f, scaled, uw, matrix, equation_names, variable_names)
+    finally:
+        matrix.matrix = None  # the integrator must build its own iteration matrix
     raise DAEError(
         _message(
-            t,
-            "the initial values are inconsistent and could not be made consistent"
-            + (f" ({last_problem})" if last_problem else "")
-            + f"; the largest remaining residuals: {eqs}",
-            names,
+            t, what, f"they are inconsistent and could not be made consistent ({problem})", detail
         )
     )
 
 
-def _message(t, what, names) -> str:
-    return f"At t = {t:.10g}: {what}."
+def _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix):
+    """dF/du by finite differences; increments as IDA's: max(sqrt(eps) |u|, 1 / uw)."""
+    inc = np.maximum(SQRT_EPS * np.abs(u), 1.0 / uw)
+    inc = (u + inc) - u  # exactly representable
+    tiny = inc == 0.0  # u so large that 1/uw is below its ulp
+    if np.any(tiny):
+        inc[tiny] = np.spacing(np.abs(u[tiny])) * 2.0**20
+    jac = matrix.finite_difference(t, y, yp, f, inc, ymask, ypmask)
+    matrix.matrix = jac
+    matrix.cj = None
+    return jac
+
+
+def _row_scales(jac, uw) -> np.ndarray:
+    """r_i = max_j |J_ij| / uw_j: F_i / r_i is residual i in tolerance units of the
+    unknown it sets most (1 for an empty row)."""
+    if hasattr(jac, "multiply"):
+        r = np.asarray(abs(jac).multiply(1.0 / uw[None, :]).max(axis=1).todense()).ravel()
+    else:
+        r = np.max(np.abs(jac) / uw[None, :], axis=1) if jac.size else np.zeros(0)
+    return np.where(np.isfinite(r) & (r > 0), r, 1.0)
+
+
+def _update(y, yp, d, lam, ymask, ypmask):
+    return y + lam * d * ymask, yp + lam * d * ypmask
+
+
+def _at_roundoff(d, dw, u) -> bool:
+    """No component can move by more than round-off where the step is not already small."""
+    big = np.abs(dw) > TOLERANCE
+    return bool(np.all(np.abs(d[big]) <= ROUNDOFF_STEP * np.abs(u[big])))
+
+
+def _scaled_residuals(jac, f, uw) -> np.ndarray:
+    """|F_i| / max_j |J_ij| / uw_j: each residual in tolerance units of the unknowns it sets."""
+    return np.abs(f) / _row_scales(jac, uw)
+
+
+def _worst(f, scaled, uw, matrix, equation_names, variable_names, count=4) -> str:
+    """The largest residuals by name, largest first, with the unknown each one sets most."""
+    if f is None:
+        return ""
+    measure = scaled if scaled is not None else np.abs(f)
+    jac = matrix.matrix
+    dense = None
+    if jac is not None and f.size <= 5000:
+        dense = np.abs(jac.toarray() if hasattr(jac, "toarray") else jac) / uw[None, :]
+    parts = []
+    for i in np.argsort(-measure)[:count]:
+        if measure[i] == 0.0:
+            continue
+        text = f"{eq_name(equation_names, i)} (residual {f[i]:.3g}"
+        if scaled is not None:
+            text += f", {scaled[i]:.3g} times the tolerance"
+        if dense is not None and np.any(dense[i]):
+            text += f"; it sets mainly {var_name(variable_names, int(np.argmax(dense[i])))}"
+        parts.append(text + ")")
+    if not parts:
+        return ""
+    return "the largest remaining residuals, largest first: " + "; ".join(parts)
+
+
+def _nonfinite_equations(residual, t, y, yp, equation_names) -> str:
+    try:
+        f = np.asarray(residual(t, y, yp), dtype=float)
+    except ResidualDomainError as exc:
+        return f"the residual reports: {exc}"
+    bad = np.flatnonzero(~np.isfinite(f))[:5]
+    if bad.size == 0:
+        return ""
+    return "NaN or inf in " + ", ".join(eq_name(equation_names, i) for i in bad)
+
+
+def _message(t, what, problem, detail="") -> str:
+    text = f"At t = {t:.10g}, {what}: {problem}"
+    if detail:
+        text += f"; {detail}"
+    return text + "."
 
 
 def detect_algebraic(residual, t, y, yp, matrix: IterationMatrix) -> np.ndarray:
     """Components whose derivative does not appear in F, found by probing dF/dy'.
 
     A column of dF/dy' that is zero at the initial point and at a perturbed point
-    marks an algebraic component.
+    marks an algebraic component. A column that looks zero is probed again with
+    increments 1e4, 1e8 and 1e12 times larger: when F holds terms far larger than
+    the y' term (y' + 1e12 y, say), a small increment of y' is lost in round-off
+    and the component would be taken for algebraic.
     """
     n = y.size
     mask = np.ones(n, dtype=bool)
@@ -135,5 +294,17 @@ def detect_algebraic(residual, t, y, yp, matrix: IterationMatrix) -> np.ndarray:
         jac = matrix.finite_difference(t, y, yp_probe, f0, inc, 0.0, 1.0)
         dense = jac.toarray() if hasattr(jac, "toarray") else jac
         mask &= ~np.any(dense != 0.0, axis=0)
+        for j in np.flatnonzero(mask):
+            for factor in (1e4, 1e8, 1e12):
+                probe = yp_probe.copy()
+                probe[j] += factor * inc[j]
+                try:
+                    f1 = residual(t, y, probe)
+                except ResidualDomainError:
+                    mask[j] = False  # it depends on y'_j (its domain does)
+                    break
+                if np.any(f1 != f0):
+                    mask[j] = False
+                    break
     matrix.matrix = None
     return mask

@@ -26,6 +26,7 @@ import scipy.sparse.linalg
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
 from dnasim.errors import DAEError
+from dnasim.solver.callbacks import call_user
 
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 (_GETRS,) = scipy.linalg.get_lapack_funcs(("getrs",), (np.zeros(1),))
@@ -75,11 +76,13 @@ class IterationMatrix:
         jac: Callable | None = None,
         sparsity=None,
         names: Sequence[str] | None = None,
+        equation_names: Sequence[str] | None = None,
     ):
         self.residual = residual
         self.n = n
         self.jac = jac
         self.names = names
+        self.equation_names = equation_names
         self.sparse = sparsity is not None
         if sparsity is not None:
             pattern = scipy.sparse.csc_matrix(sparsity, dtype=float, copy=True)
@@ -108,7 +111,7 @@ class IterationMatrix:
     def evaluate(self, t, y, yp, f0, cj, h, weights) -> None:
         """Compute J = dF/dy + cj dF/dy' at (t, y, yp); f0 = F(t, y, yp) already evaluated."""
         if self.jac is not None:
-            matrix = self.jac(t, y, yp, cj)
+            matrix = call_user(self.jac, "the Jacobian function jac", t, t, y, yp, cj)
             if scipy.sparse.issparse(matrix):
                 self.sparse = True
                 matrix = scipy.sparse.csc_matrix(matrix)
@@ -201,10 +204,15 @@ class IterationMatrix:
             return f"{self.names[i]} (index {i})"
         return f"index {i}"
 
+    def _eq(self, i: int) -> str:
+        if self.equation_names is not None and i < len(self.equation_names):
+            return f"equation {self.equation_names[i]}"
+        return f"equation {i}"
+
     def _describe_nonfinite(self) -> str:
         dense = self.matrix.toarray() if self.sparse else self.matrix
         rows, cols = np.nonzero(~np.isfinite(dense))
-        eqs = ", ".join(f"equation {r}" for r in sorted(set(rows.tolist()))[:5])
+        eqs = ", ".join(self._eq(r) for r in sorted(set(rows.tolist()))[:5])
         var = ", ".join(self._name(c) for c in sorted(set(cols.tolist()))[:5])
         return f": in {eqs}, with respect to {var}."
 
@@ -217,7 +225,7 @@ class IterationMatrix:
         unmatched_cols = [j for j in range(self.n) if j not in matched_cols]
         head = f"The iteration matrix dF/dy + cj*dF/dy' is singular ({detail}). "
         if unmatched_rows.size:
-            eqs = ", ".join(f"equation {i}" for i in unmatched_rows[:8])
+            eqs = ", ".join(self._eq(i) for i in unmatched_rows[:8])
             var = ", ".join(self._name(j) for j in unmatched_cols[:8])
             return (
                 head + f"It is structurally singular: {eqs} cannot be paired with a variable of "
@@ -231,7 +239,7 @@ class IterationMatrix:
             var_idx = np.argsort(-np.abs(vt[-1]))[:4]
             eq_idx = np.argsort(-np.abs(u[:, -1]))[:4]
             var = ", ".join(self._name(j) for j in var_idx)
-            eqs = ", ".join(f"equation {i}" for i in eq_idx)
+            eqs = ", ".join(self._eq(i) for i in eq_idx)
             return (
                 head + f"It is numerically singular (smallest singular value {s[-1]:.3g}). "
                 f"The variables most involved: {var}; the equations most involved: {eqs}."

@@ -42,9 +42,13 @@ class DAEResult:
     t : output times, shape (m,)
     y, yp : solution and derivative, shape (n, m)
     success, status (0: reached the end, 1: a terminal event, -1: failed), message
-    t_events, y_events : per switch function, the located times and states
-    event_log : per located discontinuity, a dict with "event" (index), "name",
-        "t" (located time), "iterates" (list of (t, g)) and "terminal"
+    t_events, y_events : per switch function, the located times and states (a
+        vector switch: one entry per element crossing, in time order)
+    event_log : per located crossing (per element for a vector switch), a dict
+        with "event" (switch index), "name" (the element's name for a vector
+        switch), "element" (0 for a scalar switch), "t" (located time),
+        "iterates" (list of (t, g) of the located element; [] for the other
+        elements that crossed at the same time) and "terminal"
     stats : steps, rejected_error, rejected_newton, residual_evals, jac_evals,
         lu_decomps, newton_iters
     step_history : array of shape (steps, 3): t, h, order of every accepted step

@@ -44,12 +44,26 @@ def solve_with_ida(
     if linsolver is None:
         linsolver = "dense" if n < 200 else "sparse"
     events = list(events)
+    # Scalar switches count 1, vector switches (attribute ``size``) their size.
+    sizes = [int(g.size) if hasattr(g, "size") else 1 for g in events]
+    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int) if events else []
+    n_events = int(sum(sizes))
+    directions = [_directions(g, m) for g, m in zip(events, sizes, strict=True)]
+    directions = np.concatenate(directions) if events else np.zeros(0)
     alg_idx = np.flatnonzero(dae.algebraic)
     stats = {"steps": 0, "residual_evals": 0, "restarts": 0}
     counter = [0]
 
+    # The stop IDA is stepping to. A step that lands on it must see the residual at its
+    # left limit (a boundary that steps there must still have its old value), as
+    # dnasim's solver does; otherwise IDA meets the jump on the last step and creeps
+    # towards the tstop with ever smaller steps.
+    current_stop = [np.inf]
+
     def resfn(t, y, yp, res):
         counter[0] += 1
+        if t >= current_stop[0]:
+            t = np.nextafter(current_stop[0], -np.inf)
         res[:] = dae.residual(t, y, yp)
 
     def make(calc):
@@ -73,13 +87,16 @@ def solve_with_ida(
         if events:
 
             def eventsfn(t, y, yp, out):
-                for i, g in enumerate(events):
-                    out[i] = g(t, y, yp)
+                for g, k, m in zip(events, offsets, sizes, strict=True):
+                    if hasattr(g, "size"):
+                        out[k : k + m] = g(t, y, yp)
+                    else:
+                        out[k] = g(t, y, yp)
 
-            eventsfn.terminal = [True] * len(events)
-            eventsfn.direction = [int(getattr(g, "direction", 0)) for g in events]
+            eventsfn.terminal = [True] * n_events
+            eventsfn.direction = [int(d) for d in directions]
             opts["eventsfn"] = eventsfn
-            opts["num_events"] = len(events)
+            opts["num_events"] = n_events
         return IDA(resfn, **opts)
 
     ts, ys, yps, log, hist = [t0], [np.array(y0, float)], [np.array(yp0, float)], [], []
@@ -92,6 +109,7 @@ def solve_with_ida(
     success, message = True, "reached t_end"
     while t < t_end * (1 - 1e-15) - 1e-300:
         stop = next(s for s in stops if s > t + 1e-12 * max(1.0, abs(t)))
+        current_stop[0] = stop if stop < t_end else np.inf
         res = solver.step(stop, method="onestep", tstop=stop)
         if not res.success:
             success, message = False, res.message
@@ -110,15 +128,20 @@ def solve_with_ida(
         fired = res.i_events is not None and np.any(np.asarray(res.i_events) != 0)
         at_stop = abs(t - stop) <= 1e-10 * max(1.0, abs(stop))
         if fired:
-            ie = np.asarray(res.i_events).reshape(-1, len(events))[-1]
-            for i in np.flatnonzero(ie):
-                g = events[i]
-                log.append(
-                    {"event": int(i), "name": getattr(g, "name", str(i)), "iterates": [], "t": t}
-                )
+            ie = np.asarray(res.i_events).reshape(-1, n_events)[-1]
+            for i, (g, k, m) in enumerate(zip(events, offsets, sizes, strict=True)):
+                which = np.flatnonzero(ie[k : k + m])
+                if which.size == 0:
+                    continue
+                vector = hasattr(g, "size")
+                for j in which:
+                    name = g.names[j] if vector else getattr(g, "name", str(i))
+                    log.append(
+                        {"event": i, "name": name, "element": int(j), "iterates": [], "t": t}
+                    )
                 act = getattr(g, "action", None)
                 if act is not None:
-                    out = act(t, y, yp)
+                    out = act(t, y, yp, which) if vector else act(t, y, yp)
                     if out is not None:
                         y, yp = out
         if fired or (at_stop and stop < t_end):
@@ -144,3 +167,9 @@ def solve_with_ida(
         step_history=np.array(hist).reshape(-1, 3),
         sol=None,
     )
+
+
+def _directions(g, size) -> np.ndarray:
+    """A switch's direction (-1, 0, +1) for each of its ``size`` elements."""
+    d = getattr(g, "direction", None)
+    return np.broadcast_to(np.sign(np.asarray(0 if d is None else d, dtype=float)), (size,))
