@@ -111,13 +111,17 @@ def run(n, solver, rtol=1e-6, linsolver=None):
                 dense_output=False,
             )
         else:
-            from dnasim.testing.ida_plant import solve_with_ida
+            from dnasim.solver.ida import solve_ida
+            from dnasim.start import reinitialise
 
-            res = solve_with_ida(
-                dae,
+            res = solve_ida(
+                dae.residual,
                 (0.0, T_END),
                 y0,
                 yp0,
+                algebraic=dae.algebraic,
+                reinitialise=lambda t, y, yp: reinitialise(dae, t, y, yp),
+                jac_sparsity=dae.jac_sparsity,
                 rtol=rtol,
                 atol=dae.atol_vector(1e-6, y0),
                 tstops=dae.tstops(0.0, T_END),

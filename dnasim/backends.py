@@ -51,9 +51,9 @@ class Problem:
     #: output every output_interval [s] (generated as the solver goes), else t_eval
     output_interval: float | None = None
     callback: object = None
-    #: the System, only for IDA's re-initialisation after a restart (the damped
-    #: Newton of dnasim.initialization needs its nominal scales and patterns)
-    system: object = None
+    #: reinitialise(t, y, yp) -> (y, yp): consistent values after a jump, the
+    #: differential variables kept (for backends that restart by themselves, IDA)
+    reinitialise: object = None
 
 
 @dataclass
@@ -124,13 +124,16 @@ class IDA:
     name: str = field(default="IDA", init=False)
 
     def solve(self, pb: Problem):
-        from dnasim.testing.ida_plant import solve_with_ida
+        from dnasim.solver.ida import solve_ida
 
-        return solve_with_ida(
-            pb.system,
+        return solve_ida(
+            pb.residual,
             pb.t_span,
             pb.y0,
             pb.yp0,
+            algebraic=pb.algebraic,
+            reinitialise=pb.reinitialise,
+            jac_sparsity=pb.jac_sparsity,
             rtol=self.rtol,
             atol=pb.atol,
             max_order=self.max_order,

@@ -31,6 +31,7 @@ Contracts
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 
@@ -84,7 +85,7 @@ def simulate(
     callback(t, y, yp): called at every output point. throw: raise ``DAEError``
     (with ``err.result``) instead of returning Results with success False.
     """
-    from dnasim.start import initial_values
+    from dnasim.start import initial_values, reinitialise
 
     if solver is None:
         solver = NordsieckBDF(**solver_options)
@@ -130,7 +131,7 @@ def simulate(
         equation_names=list(system.eq_names),
         t_eval=t_eval,
         callback=point if (sinks or callback is not None) else None,
-        system=system,
+        reinitialise=partial(reinitialise, system),
     )
     t_start = time.perf_counter()
     try:

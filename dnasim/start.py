@@ -16,7 +16,7 @@ import numpy as np
 
 from dnasim.errors import PlantError
 
-__all__ = ["initial_values"]
+__all__ = ["initial_values", "reinitialise"]
 
 
 def initial_values(system, t0: float = 0.0, start: str = "steady"):
@@ -40,3 +40,11 @@ def initial_values(system, t0: float = 0.0, start: str = "steady"):
         if not changed:
             break
     return y, yp
+
+
+def reinitialise(system, t: float, y, yp):
+    """Consistent (y, yp) after a jump at t, the differential variables kept (the
+    algebraic ones and y' solved): the restart of a backend without its own."""
+    from dnasim.initialization import solve_mixed
+
+    return solve_mixed(system, t, y, yp, system.algebraic.copy(), what="restart")

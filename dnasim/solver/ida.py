@@ -1,28 +1,30 @@
-"""Integrate an assembled plant with SUNDIALS IDA (scikit-sundae), for cross-checks and
-benchmarks. Not used by ``dnasim.solve_dae``; needs the optional dependency
-``scikit-sundae``. (``dnasim.testing.ida`` runs a bare residual through IDA in one
-call; this driver adds what a plant needs: time events, switches and restarts.)
+"""SUNDIALS IDA (scikit-sundae) as a second backend with dnasim's semantics:
+``solve_ida`` returns a ``DAEResult`` like ``solve_dae``. Needs the optional
+dependency ``scikit-sundae``. (``dnasim.testing.ida`` runs a bare residual
+through IDA in one call; this driver adds time events, switches and restarts.)
 
-The driver mirrors the plant semantics: it stops exactly at every tstop and
-re-initialises there (consistent y' and algebraic y by ``dnasim.initialization``,
-the same damped Newton as the plant's "given" start), and
-it stops at every switch crossing, runs the component's action and
-re-initialises. The returned object has the fields of ``DAEResult``.
+The driver stops exactly at every tstop and re-initialises there, stops at
+every switch crossing, runs the switch's action and re-initialises.
+Re-initialisation is the caller's ``reinitialise(t, y, yp) -> (y, yp)``
+(consistent y' and algebraic y with the differential y kept; for plants the
+damped Newton of ``dnasim.initialization``, as in ``dnasim.backends.IDA``):
+IDACalcIC fails on the large jumps a step of a boundary value causes.
 """
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
 
-def solve_with_ida(
-    dae,
+def solve_ida(
+    residual,
     t_span,
     y0,
     yp0,
     *,
+    algebraic,
+    reinitialise,
+    jac_sparsity=None,
     rtol=1e-6,
     atol=1e-8,
     max_order=4,
@@ -37,12 +39,13 @@ def solve_with_ida(
 ):
     from sksundae.ida import IDA
 
-    from dnasim.initialization import solve_mixed
+    from dnasim.solver.result import DAEResult
 
     t0, t_end = map(float, t_span)
-    n = dae.n
+    n = len(y0)
+    algebraic = np.asarray(algebraic, dtype=bool)
     if linsolver is None:
-        linsolver = "dense" if n < 200 else "sparse"
+        linsolver = "dense" if n < 200 or jac_sparsity is None else "sparse"
     events = list(events)
     # Scalar switches count 1, vector switches (attribute ``size``) their size.
     sizes = [int(g.size) if hasattr(g, "size") else 1 for g in events]
@@ -50,7 +53,7 @@ def solve_with_ida(
     n_events = int(sum(sizes))
     directions = [_directions(g, m) for g, m in zip(events, sizes, strict=True)]
     directions = np.concatenate(directions) if events else np.zeros(0)
-    alg_idx = np.flatnonzero(dae.algebraic)
+    alg_idx = np.flatnonzero(algebraic)
     stats = {"steps": 0, "residual_evals": 0, "restarts": 0}
     counter = [0]
 
@@ -64,7 +67,7 @@ def solve_with_ida(
         counter[0] += 1
         if t >= current_stop[0]:
             t = np.nextafter(current_stop[0], -np.inf)
-        res[:] = dae.residual(t, y, yp)
+        res[:] = residual(t, y, yp)
 
     def make(calc):
         opts = dict(
@@ -76,7 +79,7 @@ def solve_with_ida(
             linsolver=linsolver,
         )
         if linsolver == "sparse":
-            opts["sparsity"] = dae.jac_sparsity
+            opts["sparsity"] = jac_sparsity
         if np.isfinite(max_step):
             opts["max_step"] = max_step
         if h0:
@@ -145,15 +148,13 @@ def solve_with_ida(
                     if out is not None:
                         y, yp = out
         if fired or (at_stop and stop < t_end):
-            # consistent values after the jump by dnasim's damped Newton (IDACalcIC
-            # fails on the large jumps a step of a boundary value causes), keeping
-            # the differential variables
+            # consistent values after the jump, keeping the differential variables
             stats["restarts"] += 1
-            y, yp = solve_mixed(dae, t, y, yp, dae.algebraic.copy(), what="IDA restart")
+            y, yp = reinitialise(t, y, yp)
             solver = make(False)
             solver.init_step(t, y, yp)
     stats["residual_evals"] = counter[0]
-    return SimpleNamespace(
+    return DAEResult(
         t=np.array(ts),
         y=np.array(ys).T,
         yp=np.array(yps).T,
