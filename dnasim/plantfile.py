@@ -181,14 +181,9 @@ class _LineIndex:
 
 
 def _registry() -> dict[str, type]:
-    try:
-        from dnasim.components import REGISTRY
-    except ImportError:
-        try:  # the package's __init__ may not import everything yet
-            from dnasim.components.base import REGISTRY
-        except ImportError as exc:  # pragma: no cover - during development only
-            raise PlantError(f"the component library cannot be imported: {exc}") from exc
-    return REGISTRY
+    from dnasim.plugins import registry
+
+    return registry()
 
 
 def _names(obj) -> list[str]:
@@ -1083,6 +1078,24 @@ def _link_dimension_problem(dest: ComponentSpec, inp: str, src: ComponentSpec, o
     )
 
 
+def _plugin_imports(v, path, errors) -> list[str]:
+    """``[plant] import = ["my_components"]``: import the component modules now
+    (before the component types are looked up), next to the plant file first."""
+    from dnasim.plugins import import_component_modules
+
+    names = [v] if isinstance(v, str) else v
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        errors.add(("plant",), "import", f"expected a list of module names, got {v!r}")
+        return []
+    p = Path(str(path))
+    base = p.parent if p.suffix and p.parent.is_dir() else None
+    try:
+        return import_component_modules(names, base)
+    except PlantError as exc:
+        errors.add(("plant",), "import", str(exc).removeprefix("import: "))
+        return []
+
+
 def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> PlantSpec:
     """Validate decoded TOML; every problem becomes part of one ``PlantError``."""
     errors = _Errors(str(path), _LineIndex(text) if text is not None else None)
@@ -1100,6 +1113,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
     name = Path(str(path)).stem
     description = ""
     medium = None
+    imports: list[str] = []
     meta = data.get("plant", {})
     if not isinstance(meta, dict):
         errors.add((), "plant", f"expected a table [plant], got {_type_name(meta)}")
@@ -1113,12 +1127,14 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
             medium = _as_text(v, errors, ("plant",), k)
             if medium is not None:
                 _check_medium(medium, errors, ("plant",), k)
+        elif k == "import":
+            imports = _plugin_imports(v, path, errors)
         else:
             errors.add(
                 ("plant",),
                 k,
-                "unknown key; [plant] has name, description and medium"
-                + _suggest(k, ("name", "description", "medium")),
+                "unknown key; [plant] has name, description, medium and import"
+                + _suggest(k, ("name", "description", "medium", "import")),
             )
     sim = _simulation(data, errors)
     comps = data.get("components")
@@ -1175,6 +1191,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
         simulation=sim,
         components=specs,
         medium=medium,
+        imports=imports,
     )
 
 

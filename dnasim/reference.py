@@ -1,6 +1,6 @@
 """The component reference, generated from the library: ``python -m dnasim.reference``.
 
-It writes Markdown with, for every registered component type, exactly what
+It writes Markdown with, for every component type of the library (not plugins), exactly what
 ``dnasim components NAME`` prints (ports, parameters with units, defaults and
 ranges, equations). ``docs/components.md`` is this module's output; a test keeps
 the two in step.
@@ -24,7 +24,8 @@ def component_reference_markdown() -> str:
         "`dnasim components NAME` prints the same for one type. All quantities in SI units.",
         "",
     ]
-    for name in sorted(registry):
+    library = [n for n in sorted(registry) if registry[n].__module__.startswith("dnasim.")]
+    for name in library:  # plugins document themselves
         info = component_info(registry[name])
         parts += [f"## {name}", "", "```", format_component(info).rstrip(), "```", ""]
     return "\n".join(parts)

@@ -128,8 +128,9 @@ class ComponentSpec:
         """The component class: ``cls``, else the registry's entry for ``type``."""
         if self.cls is not None:
             return self.cls
-        from dnasim.components import REGISTRY
+        from dnasim.plugins import registry
 
+        REGISTRY = registry()
         try:
             return REGISTRY[self.type]
         except KeyError:

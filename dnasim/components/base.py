@@ -349,6 +349,17 @@ class Component:
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         if cls.__dict__.get("REGISTER", True):
+            old = REGISTRY.get(cls.__name__)
+            same = old is not None and (old.__module__, old.__qualname__) == (
+                cls.__module__,
+                cls.__qualname__,
+            )
+            if old is not None and not same:  # the same class re-imported is no clash
+                raise PlantError(
+                    f"component type '{cls.__name__}' ({cls.__module__}) clashes with "
+                    f"'{cls.__name__}' from {old.__module__}: component types need unique "
+                    "class names; rename the class, or set REGISTER = False for a base class"
+                )
             REGISTRY[cls.__name__] = cls
 
     # ------------------------------------------------------------------ set-up
