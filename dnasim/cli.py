@@ -586,5 +586,58 @@ def _default_vars(names):
     return default_plot_variables(names)
 
 
+# --------------------------------------------------------------------------- linearize
+
+
+@main.command(context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+@click.option(
+    "--inputs",
+    "inputs",
+    required=True,
+    metavar="LIST",
+    help="Comma-separated inputs: parameters (steam.T) or signals held as inputs (spray_valve.z).",
+)
+@click.option(
+    "--outputs", "outputs", required=True, metavar="LIST", help="Comma-separated results names."
+)
+@click.option(
+    "--at",
+    "at",
+    default="steady",
+    metavar="steady|T",
+    help='Operating point: the steady state, or the simulated state at time T (e.g. "5 min").',
+)
+@click.option(
+    "-o", "--output", "out_dir", default=None, metavar="DIR", help="Write linear.npz/.mat here."
+)
+@click.option("--all-states", is_flag=True, help="Keep states no output depends on.")
+def linearize(plant_file, inputs, outputs, at, out_dir, all_states):
+    """Linearise PLANT.toml: x' = A x + B u, y = C x + D u; print eigenvalues, time
+    constants, damping and DC gains; with -o write linear.npz (+ linear_A.npz ...,
+    scipy.sparse) and linear.mat."""
+    from dnasim.errors import DnasimError
+    from dnasim.linearize import linearize as _linearize
+
+    loaded = _load(plant_file)
+    t = None if at.strip().lower() == "steady" else _parse_option_quantity(at, "s", "--at")
+    try:
+        lm = _linearize(
+            loaded,
+            _split_patterns([inputs]),
+            _split_patterns([outputs]),
+            t=t,
+            keep_all_states=all_states,
+        )
+    except DnasimError as exc:
+        raise InputError(f"{plant_file}: {exc}") from None
+    click.echo(lm.summary())
+    if out_dir:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        for f in (lm.save_npz(out / "linear.npz"), lm.save_mat(out / "linear.mat")):
+            click.echo(f"wrote {f}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
