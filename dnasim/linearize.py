@@ -302,7 +302,7 @@ class LinearModel:
         np.savez(
             path,
             **{
-                k: (v.astype(str) if getattr(v, "dtype", None) == object else v)
+                k: (v.astype(str) if getattr(v, "dtype", None) is np.dtype(object) else v)
                 for k, v in arrs.items()
             },
         )
