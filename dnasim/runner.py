@@ -32,7 +32,12 @@ from dnasim.output import (
     write_steps_csv,
 )
 
+#: last column of results.csv: 1 on the row of the state right after a discontinuity
+#: (the row before it, at the same time, holds the left limit)
+RESTART_COLUMN = "restart"
+
 __all__ = [
+    "RESTART_COLUMN",
     "RunOutcome",
     "run_plant",
     "solve_streaming",
@@ -150,7 +155,7 @@ class _Progress:
             self.bar = None
 
 
-def solve_streaming(plant, sim, callback, *, dense_output: bool = False):
+def solve_streaming(plant, sim, callback, *, dense_output: bool = False, own_grid: bool = False):
     """Integrate ``plant`` with the settings ``sim`` and hand every output point to
     ``callback(t, y, yp)``; returns the solver's ``DAEResult``.
 
@@ -162,12 +167,18 @@ def solve_streaming(plant, sim, callback, *, dense_output: bool = False):
     no dense output (the Nordsieck pieces of every step), no ``PlantResults``
     table, and ``sim.max_steps`` reaches ``solve_dae``. ``sim.t_eval()`` checks the
     number of output points against its limit before the grid exists.
+
+    ``own_grid=True``: the solver gets no ``t_eval`` and hands over every step and
+    both sides of every discontinuity (the caller makes the grid rows itself,
+    :class:`dnasim.output_grid.OutputGrid`).
     """
     from dnasim.solver import solve_dae
 
     dae = plant.assemble()
     t0, t_end = sim.t_start, sim.t_end
     t_eval = sim.t_eval()
+    if own_grid:
+        t_eval = None
     y0, yp0 = plant.initial_values(t0, sim.start)
     kwargs = {}
     if getattr(sim, "max_steps", None) is not None:
@@ -249,20 +260,22 @@ def run_plant(
     # step size, kept (3 floats a step) for steps.csv in case the solver hands nothing over
     rows_are_steps = sim.output_interval is None
 
-    def callback(t, y, yp):
+    def write(t, y, yp, restart):
         try:
             w = state["writer"]
             if w is None:
                 names, units, row = plant_output_layout(plant)
-                header = [column_header("time", "s")] + [
-                    column_header(n, units.get(n)) for n in names
-                ]
+                header = (
+                    [column_header("time", "s")]
+                    + [column_header(n, units.get(n)) for n in names]
+                    + [column_header(RESTART_COLUMN, "-")]
+                )
                 w = StreamingCSV(
                     results_path, header, flush_rows=flush_rows, flush_seconds=flush_seconds
                 )
                 state["writer"], state["row"] = w, row
             values = state["row"](t, y, yp)
-            w.write_row([t, *values])
+            w.write_row([t, *values, float(restart)])
         except OutputError as exc:
             state["output_error"] = exc
             # a DAEError stops the solver, which then hands over its partial result
@@ -275,10 +288,22 @@ def run_plant(
             state["prev_t"] = t
         bar.update(t)
 
+    if rows_are_steps:
+
+        def callback(t, y, yp):  # every step; a repeated time is the state after a restart
+            write(t, y, yp, int(state["prev_t"] is not None and float(t) == state["prev_t"]))
+
+    else:
+        from dnasim.output_grid import OutputGrid
+
+        callback = OutputGrid(sim.t_eval(), write)
+
     status, message, result = "finished", "", None
     try:
         try:
-            result = solve_streaming(plant, sim, callback, dense_output=keep_rows)
+            result = solve_streaming(
+                plant, sim, callback, dense_output=keep_rows, own_grid=not rows_are_steps
+            )
             success = bool(getattr(result, "success", True))
             if not success:
                 status = "failed"
