@@ -24,10 +24,6 @@ from dnasim.output import (
     StreamingCSV,
     clear_results,
     column_header,
-    plot_steps,
-    plot_variables,
-    read_results_csv,
-    select_variables,
     write_events_csv,
     write_steps_csv,
 )
@@ -405,24 +401,12 @@ def default_plot_variables(names, limit: int = 12) -> list[str]:
     return chosen or list(names)[: min(limit, 8)]
 
 
-def write_plots(outcome: RunOutcome, out_dir, patterns) -> list[Path]:
-    out = Path(out_dir)
-    names, units, data = read_results_csv(out / "results.csv")
-    variables = names[1:]
-    chosen = (
-        select_variables(variables, patterns) if patterns else default_plot_variables(variables)
-    )
-    if patterns and not chosen:
-        raise ValueError(f"no variable matches {' '.join(patterns)}")
-    ev_times = [e.get("t") for e in outcome.event_log if e.get("t") is not None]
-    files = [
-        plot_variables(
-            data["time"], data, chosen, units, out / "variables.png", event_times=ev_times
-        )
-    ]
-    if outcome.step_history is not None and len(outcome.step_history):
-        files.append(plot_steps(outcome.step_history, out / "steps.png", event_times=ev_times))
-    return files
+def write_plots(outcome: RunOutcome, out_dir, patterns, units: str = "si") -> list[Path]:
+    """``variables.png`` and ``steps.png`` from the files the run wrote (the same
+    function as ``dnasim plot``: :func:`dnasim.plots.write_run_plots`)."""
+    from dnasim.plots import write_run_plots
+
+    return write_run_plots(Path(out_dir) / "results.csv", patterns, units=units)
 
 
 # --------------------------------------------------------------------------- check / components

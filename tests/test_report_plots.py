@@ -1,0 +1,98 @@
+"""report.html and the engineers' plots, from a real run of the seed's Example 2."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from dnasim.cli import main
+from dnasim.plots import default_selection, display, merge_identical, quantity_of
+
+PLANT = Path(__file__).parents[1] / "plants" / "attemperator.toml"
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("att")
+    res = CliRunner().invoke(
+        main,
+        [
+            "run",
+            str(PLANT),
+            "-o",
+            str(out),
+            "-q",
+            "--plot",
+            "--report",
+            "--units",
+            "engineering",
+            "--output-interval",
+            "2 s",
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    return out
+
+
+def test_report_is_self_contained(run_dir):
+    text = (run_dir / "report.html").read_text()
+    # nothing fetched: no external script, stylesheet, import or font
+    assert not re.search(r"<script[^>]+src=", text)
+    assert not re.search(r"<link[^>]+href=", text)
+    assert "@import" not in text
+    assert "Plotly.newPlot" in text  # the interactive plots, with plotly embedded
+    # the event table with its iterates (Table 10.1) and the plant structure
+    assert "Table 10.1" in text and "upper" in text
+    assert "Attemperator" in text and "PIController" in text
+    assert "equations" in text and "Fig. 10.7" in text
+    # axis titles with quantity and engineering unit (plotly's JSON escapes the degree sign)
+    assert re.search(r"temperature \[(°|\\u00b0)C\]", text) and re.search(
+        r"mass flow \[t(/|\\u002f)h\]", text
+    )
+
+
+def test_run_plot_and_plot_command_write_the_same_files(run_dir):
+    before = {p: (run_dir / p).stat().st_size for p in ("variables.png", "steps.png")}
+    for p in before:
+        (run_dir / p).unlink()
+    res = CliRunner().invoke(main, ["plot", str(run_dir / "results.csv"), "--units", "engineering"])
+    assert res.exit_code == 0, res.output
+    for p, size in before.items():
+        # the same picture: matplotlib's PNG of the same figure, byte sizes within 1 %
+        # (the title and the data are the same; only metadata could differ)
+        assert (run_dir / p).stat().st_size == pytest.approx(size, rel=0.01)
+
+
+def test_quantities_are_separate_and_named():
+    assert quantity_of("att.T", "K") == "temperature"
+    assert quantity_of("pi.z", "-") == "controller output"
+    assert quantity_of("pi.e", "-") == "control error"
+    assert quantity_of("steam.m", "kg/s") == "mass flow"
+    assert quantity_of("pipe.Q_total", "W") == "power"
+
+
+def test_engineering_units():
+    v, u = display(np.array([273.15, 373.15]), "K", "engineering")
+    assert u == "°C" and v == pytest.approx([0.0, 100.0])
+    assert display(np.array([1e5]), "Pa", "engineering")[0] == pytest.approx([1.0])
+    assert display(np.array([1.0]), "kg/s", "engineering")[0] == pytest.approx([3.6])
+    assert display(np.array([2e6]), "W", "engineering") == (pytest.approx([2.0]), "MW")
+    assert display(np.array([5.0]), "K", "si") == (pytest.approx([5.0]), "K")
+
+
+def test_default_selection_and_merging(run_dir):
+    from dnasim.output import read_results_csv
+
+    names, units, data = read_results_csv(run_dir / "results.csv")
+    chosen = default_selection(names[1:], units)
+    assert {"att.T", "pipe.T_out", "sensor.T_s", "pi.z", "pi.e", "steam.m"} <= set(chosen)
+    # no volume temperatures, no internal controller parts, no flag column
+    assert not [n for n in chosen if "[" in n or n.endswith(("m_I", "m_p", "restart"))]
+    temps = {n: data[n] for n in chosen if units[n] == "K"}
+    groups = merge_identical(data["time"], temps)
+    merged = [g for g in groups if len(g) > 1]
+    # the attemperator's outlet is its node's temperature, the pipe's outlet its node's
+    assert ["att.T", "n_mix.T"] in merged and ["pipe.T_out", "n_line.T"] in merged
+    assert len(groups) < len(temps)
