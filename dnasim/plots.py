@@ -254,6 +254,22 @@ def write_run_plots(
     return files
 
 
+def curve_label(group: Sequence[str], comps: dict[str, set[str]]) -> str:
+    """Legend text of a curve drawn for the names in ``group`` (coinciding curves);
+    a boundary's flow says its sign convention."""
+    label = " = ".join(group)
+    if _leaf(group[0]) == "m" and "M_passed" in comps.get(group[0].split(".")[0], ()):
+        label += " (into the plant)"
+    return label
+
+
+def axis_unit(quantity: str, unit: str) -> str:
+    """The unit shown on an axis (the controller error's is not in the CSV yet)."""
+    if quantity == "control error" and unit in ("-", "1", ""):
+        return "unit of the measured signal"
+    return unit
+
+
 def _panels(names, unit_of, data, units):
     panels: dict[str, list[str]] = {}
     for n in names:
@@ -301,17 +317,13 @@ def plot_quantities(
         comps = _components(list(data))
         for g in groups:
             dashed = _leaf(g[0]) in ("setpoint", "z_max", "z_min")
-            label = " = ".join(g)
-            if _leaf(g[0]) == "m" and "M_passed" in comps.get(g[0].split(".")[0], ()):
-                label += " (into the plant)"  # a boundary's flow: its sign convention
+            label = curve_label(g, comps)
             ax.plot(t / t_scale, series[g[0]], label=label, lw=1.3, ls="--" if dashed else "-")
         for te in restarts:
             ax.axvline(te / t_scale, color="0.55", ls=":", lw=0.8)
         for te in events:
             ax.axvline(te / t_scale, color="tab:red", ls="--", lw=0.8)
-        if q == "control error" and u == "-":
-            u = "unit of the measured signal"  # the CSV does not carry it (yet)
-        ax.set_ylabel(f"{q}\n[{u}]")
+        ax.set_ylabel(f"{q}\n[{axis_unit(q, u)}]")
         ax.grid(True, alpha=0.3)
         if groups:
             ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))

@@ -63,6 +63,16 @@ def _description(loaded) -> str:
 
 # --------------------------------------------------------------------------- html
 
+_STAT_NAMES = {
+    "steps": "accepted steps",
+    "rejected_error": "steps rejected by the error test",
+    "rejected_newton": "steps rejected by Newton failure",
+    "residual_evals": "residual evaluations",
+    "jac_evals": "Jacobian evaluations",
+    "lu_decomps": "LU factorisations",
+    "newton_iters": "Newton iterations",
+}
+
 _CSS = """
 body { font-family: sans-serif; margin: 1.5em 2em; color: #222; max-width: 1300px; }
 h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.2em; margin-top: 1.6em;
@@ -98,9 +108,13 @@ def _figures(results_csv, units: str) -> list:
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
 
+    from dnasim.output import _time_axis
     from dnasim.plots import (
         NOT_PLOTTED,
+        _components,
         _panels,
+        axis_unit,
+        curve_label,
         default_selection,
         display,
         merge_identical,
@@ -110,14 +124,26 @@ def _figures(results_csv, units: str) -> list:
     names, unit_of, data, steps, events, restarts = read_run(results_csv)
     variables = [n for n in names[1:] if n not in NOT_PLOTTED]
     chosen = default_selection(variables, unit_of) or variables[:8]
-    t = data["time"]
+    scale, t_label = _time_axis(data["time"])
+    t = data["time"] / scale
+    comps = _components(list(data))
     figs = []
+    layout = {
+        "margin": {"l": 70, "r": 20, "t": 40, "b": 40},
+        "legend": {
+            "orientation": "h",
+            "y": 1.02,
+            "yanchor": "bottom",
+            "x": 0,
+            "font": {"size": 11},
+        },
+    }
 
     def markers(fig, rows=None):
         for te in restarts:
-            fig.add_vline(x=te, line_dash="dot", line_color="#999", line_width=1)
+            fig.add_vline(x=te / scale, line_dash="dot", line_color="#999", line_width=1)
         for te in events:
-            fig.add_vline(x=te, line_dash="dash", line_color="#d62728", line_width=1)
+            fig.add_vline(x=te / scale, line_dash="dash", line_color="#d62728", line_width=1)
 
     for q, group in _panels(chosen, unit_of, data, units):
         series, shown = {}, "-"
@@ -125,17 +151,13 @@ def _figures(results_csv, units: str) -> list:
             series[n], shown = display(data[n], unit_of.get(n, ""), units)
         fig = go.Figure()
         for g in merge_identical(t, series):
-            fig.add_trace(
-                go.Scatter(x=t, y=series[g[0]], mode="lines", name=" = ".join(g), line_width=1.5)
-            )
+            fig.add_trace(go.Scatter(x=t, y=series[g[0]], mode="lines", name=curve_label(g, comps)))
         markers(fig)
         fig.update_layout(
-            title=f"{q} [{shown}]",
-            xaxis_title="time [s]",
-            yaxis_title=f"{q} [{shown}]",
-            height=360,
-            margin={"l": 60, "r": 20, "t": 40, "b": 40},
-            legend={"font": {"size": 10}},
+            xaxis_title=t_label,
+            yaxis_title=f"{q} [{axis_unit(q, shown)}]",
+            height=380,
+            **layout,
         )
         figs.append(fig)
     if steps:
@@ -143,26 +165,27 @@ def _figures(results_csv, units: str) -> list:
         fig = make_subplots(rows=2, cols=1, shared_xaxes=True, vertical_spacing=0.06)
         fig.add_trace(
             go.Scatter(
-                x=arr[:, 0], y=arr[:, 1], mode="lines+markers", marker_size=3, name="step size [s]"
+                x=arr[:, 0] / scale,
+                y=arr[:, 1],
+                mode="lines+markers",
+                marker_size=3,
+                name="step size [s]",
             ),
             row=1,
             col=1,
         )
         fig.add_trace(
-            go.Scatter(x=arr[:, 0], y=arr[:, 2], mode="lines", line_shape="hv", name="order"),
+            go.Scatter(
+                x=arr[:, 0] / scale, y=arr[:, 2], mode="lines", line_shape="hv", name="order"
+            ),
             row=2,
             col=1,
         )
         fig.update_yaxes(type="log", title_text="step size [s]", row=1, col=1)
         fig.update_yaxes(title_text="order", dtick=1, row=2, col=1)
-        fig.update_xaxes(title_text="time [s]", row=2, col=1)
+        fig.update_xaxes(title_text=t_label, row=2, col=1)
         markers(fig)
-        fig.update_layout(
-            title="step size and order (seed Fig. 10.7)",
-            height=520,
-            margin={"l": 60, "r": 20, "t": 40, "b": 40},
-            showlegend=False,
-        )
+        fig.update_layout(height=520, showlegend=False, margin=layout["margin"])
         figs.append(fig)
     return figs
 
@@ -205,7 +228,11 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
                 run_rows.append((k, _fmt(getattr(sim, k))))
     parts.append(_table(("run", "value"), run_rows, num_cols=(1,)))
     parts.append(
-        _table(("solver statistic", "count"), sorted(stats.items()), num_cols=(1,))
+        _table(
+            ("solver statistic", "count"),
+            [(_STAT_NAMES.get(k, k), v) for k, v in stats.items()],
+            num_cols=(1,),
+        )
         if stats
         else "<p>no solver statistics</p>"
     )
