@@ -96,3 +96,30 @@ def test_default_selection_and_merging(run_dir):
     # the attemperator's outlet is its node's temperature, the pipe's outlet its node's
     assert ["att.T", "n_mix.T"] in merged and ["pipe.T_out", "n_line.T"] in merged
     assert len(groups) < len(temps)
+
+
+def test_set_point_and_limits_are_plotted_when_recorded(tmp_path):
+    """With the PIController outputs the lead adds (setpoint in the measured unit,
+    z_min, z_max), they are chosen and drawn with their quantities."""
+    from dnasim.plots import write_run_plots
+
+    names = ["pi.e", "pi.z", "pi.m_I", "pi.setpoint", "pi.z_min", "pi.z_max", "sensor.T_s"]
+    units = {"pi.setpoint": "K", "sensor.T_s": "K"}
+    assert default_selection(names, units) == [
+        "pi.e",
+        "pi.z",
+        "pi.setpoint",
+        "pi.z_min",
+        "pi.z_max",
+        "sensor.T_s",
+    ]
+    assert quantity_of("pi.setpoint", "K") == "temperature"
+    assert quantity_of("pi.z_max", "-") == "controller output"
+    t = np.linspace(0, 10, 11)
+    header = ["time [s]"] + [f"{n} [{units.get(n, '-')}]" for n in names] + ["restart [-]"]
+    rows = [[ti, 0.0, 0.5, 0.5, 700.0, 0.0, 1.0, 700.0, 0.0] for ti in t]
+    (tmp_path / "results.csv").write_text(
+        ",".join(header) + "\n" + "\n".join(",".join(map(str, r)) for r in rows) + "\n"
+    )
+    files = write_run_plots(tmp_path / "results.csv", units="engineering")
+    assert files == [tmp_path / "variables.png"]
