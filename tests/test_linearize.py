@@ -84,3 +84,58 @@ def test_cli_writes_npz_and_mat(tmp_path):
     np.testing.assert_allclose(mat["A"].toarray(), [[-0.125]], rtol=FD_RTOL)
     meta = np.load(tmp_path / "linear.npz")
     assert list(meta["state_names"]) == ["sensor.T_s"]
+
+
+ATT = Path(__file__).parents[1] / "plants" / "attemperator.toml"
+
+
+def _steady_output(text, names):
+    from dnasim.plantfile import loads
+
+    loaded = loads(text, "att.toml")
+    plant = loaded.plant
+    y, yp = plant.initial_values(0.0, "steady")
+    row = plant.output_row(0.0, y, yp)
+    out = plant.output_names()
+    return np.array([row[out.index(n)] for n in names])
+
+
+def test_dc_gain_matches_nonlinear_steady_states():
+    """The closed loop's static gains from the steam temperature equal the central
+    difference of two nonlinear steady states (steam at 500 -/+ 0.5 degC)."""
+    text = ATT.read_text()
+    ramp = (
+        'T = { type = "ramp", t0 = "10 min", t1 = "11 min", start = "500 degC", end = "600 degC" }'
+    )
+    assert ramp in text
+    names = ["pi.z", "att.T", "spray_valve.m"]
+    lo = _steady_output(text.replace(ramp, 'T = "499.5 degC"'), names)
+    hi = _steady_output(text.replace(ramp, 'T = "500.5 degC"'), names)
+    lm = linearize(load(ATT), ["steam.T"], names)
+    # central difference over 1 K: second-order error ~ (0.5 K)^2 |g'''|/6, and the
+    # steady-state solves converge to ~1e-10 relative: 1e-4 of the gain is ample
+    np.testing.assert_allclose(lm.dc_gain[:, 0], hi - lo, rtol=1e-4, atol=1e-9)
+    # integral action: the outlet temperature goes back to its set point
+    assert abs(lm.dc_gain[1, 0]) < 1e-6
+
+
+def test_dropping_states_keeps_the_poles():
+    """The reduced model's poles are the full model's poles without the counters'
+    zeros (a subsystem no output depends on cannot change the others' poles)."""
+    full = linearize(load(ATT), ["spray_valve.z"], ["sensor.T_s"], keep_all_states=True)
+    red = linearize(load(ATT), ["spray_valve.z"], ["sensor.T_s"])
+    ev_full = full.eigenvalues[np.abs(full.eigenvalues) > 1e-9]
+    np.testing.assert_allclose(
+        np.sort_complex(red.eigenvalues), np.sort_complex(ev_full), rtol=1e-9
+    )
+    assert np.all(red.eigenvalues.real < 0)
+    assert red.dc_gain[0, 0] < 0  # more spray, colder steam
+
+
+def test_frequency_response_of_the_lag():
+    """|G(jw)| = 1/sqrt(1 + (w tau)^2), phase -atan(w tau) for G = 1/(tau s + 1)."""
+    lm = linearize(load(LAG), ["supply.T"], ["sensor.T_s"])
+    w = np.array([0.01, 0.125, 1.0])
+    G = lm.frequency_response(w)[:, 0, 0]
+    np.testing.assert_allclose(np.abs(G), 1 / np.sqrt(1 + (8 * w) ** 2), rtol=FD_RTOL)
+    np.testing.assert_allclose(np.angle(G), -np.arctan(8 * w), rtol=FD_RTOL)
