@@ -387,10 +387,15 @@ def linearize(
             f"output(s) {', '.join(missing)} not among the plant's results; e.g. "
             + ", ".join(out_names[:12])
         )
-    t0, y0, yp0 = _operating_point(plant, sim, t)
+    hooks = [_input_hook(plant, dae, u) for u in inputs]
+    try:
+        t0, y0, yp0 = _operating_point(plant, sim, t)
+    except DnasimError as exc:
+        where = "the steady state" if t is None else f"the state at t = {t:g} s"
+        hint = " (a later time, t=T or --at T, may help)" if t is None else ""
+        raise LinearizeError(f"cannot find {where} to linearise at{hint}: {exc}") from None
     n = dae.n
     scale = np.maximum(np.asarray(dae.nominal, dtype=float), 1e-8)
-    hooks = [_input_hook(plant, dae, u) for u in inputs]
     held = {}  # equation row -> (variable index, input number)
     u0 = np.zeros(len(inputs))
     u_units = []

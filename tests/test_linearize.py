@@ -139,3 +139,26 @@ def test_frequency_response_of_the_lag():
     G = lm.frequency_response(w)[:, 0, 0]
     np.testing.assert_allclose(np.abs(G), 1 / np.sqrt(1 + (8 * w) ** 2), rtol=FD_RTOL)
     np.testing.assert_allclose(np.angle(G), -np.arctan(8 * w), rtol=FD_RTOL)
+
+
+def test_cli_at_a_time(tmp_path):
+    """--at "110 s": the state simulated up to then (the PI loop of pi_mixing.toml)."""
+    res = CliRunner().invoke(
+        main,
+        [
+            "linearize",
+            str(PI),
+            "--inputs",
+            "cold_valve.z",
+            "--outputs",
+            "sensor.T_s",
+            "--at",
+            "110 s",
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    assert "at t = 110 s" in res.output and "-0.25" in res.output  # the sensor, tau = 4 s
+    res = CliRunner().invoke(
+        main, ["linearize", str(PI), "--inputs", "pi.nothing", "--outputs", "sensor.T_s"]
+    )
+    assert res.exit_code == 2 and "pi.nothing" in res.output and "Traceback" not in res.output
