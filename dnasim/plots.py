@@ -270,12 +270,52 @@ def axis_unit(quantity: str, unit: str) -> str:
     return unit
 
 
-def _panels(names, unit_of, data, units):
+#: quantities whose curves are split into bands that do not overlap
+BANDED = ("temperature", "pressure", "specific enthalpy")
+
+
+def split_bands(groups: Sequence[Sequence[str]], data: dict, gap: float = 0.2) -> list[list]:
+    """Curves (groups of coinciding names, drawn once) of one quantity in bands that
+    do not overlap: a new band starts where the gap between the ranges of
+    consecutive curves (sorted by their minimum) is more than ``gap`` of the whole
+    span (a 200 degC water line does not squeeze a 440 degC control loop into a
+    few pixels). Highest band first; the curves keep their order within a band."""
+    ranges = []
+    for g in groups:
+        v = np.asarray(data[g[0]], dtype=float)
+        v = v[np.isfinite(v)]
+        ranges.append((float(v.min()), float(v.max())) if v.size else (0.0, 0.0))
+    lo = min((r[0] for r in ranges), default=0.0)
+    hi = max((r[1] for r in ranges), default=0.0)
+    span = hi - lo
+    if len(groups) < 2 or span <= 0:
+        return [list(groups)]
+    order = sorted(range(len(groups)), key=lambda i: ranges[i][0])
+    bands, top = [[order[0]]], ranges[order[0]][1]
+    for i in order[1:]:
+        if ranges[i][0] - top > gap * span:
+            bands.append([i])
+        else:
+            bands[-1].append(i)
+        top = max(top, ranges[i][1])
+    return [[list(groups[i]) for i in sorted(b)] for b in reversed(bands)]
+
+
+def _panels(names, unit_of, data, units=None):
+    """(quantity, [group, ...]) per panel, a group being the names of coinciding
+    curves (:func:`merge_identical`, over the whole quantity); quantities in
+    :data:`QUANTITY_ORDER`, temperatures and pressures split into bands
+    (:func:`split_bands`)."""
     panels: dict[str, list[str]] = {}
     for n in names:
         panels.setdefault(quantity_of(n, unit_of.get(n, "")), []).append(n)
     order = {q: i for i, q in enumerate(QUANTITY_ORDER)}
-    return sorted(panels.items(), key=lambda kv: order.get(kv[0], len(order)))
+    out = []
+    for q, group in sorted(panels.items(), key=lambda kv: order.get(kv[0], len(order))):
+        merged = merge_identical(None, {n: np.asarray(data[n], dtype=float) for n in group})
+        bands = split_bands(merged, data) if q in BANDED else [merged]
+        out.extend((q, band) for band in bands)
+    return out
 
 
 def plot_quantities(
@@ -297,14 +337,13 @@ def plot_quantities(
     plt = _pyplot()
     t = np.asarray(t, dtype=float)
     panels = []
-    for q, group in _panels(names, unit_of, data, units):
+    for q, merged in _panels(names, unit_of, data, units):
         series = {}
         shown_unit = None
-        for n in group:
-            v, u = display(data[n], unit_of.get(n, ""), units)
-            series[n] = v
+        for g in merged:
+            v, u = display(data[g[0]], unit_of.get(g[0], ""), units)
+            series[g[0]] = v
             shown_unit = shown_unit or u
-        merged = merge_identical(t, series)
         for i in range(0, len(merged), max_lines):
             panels.append((q, shown_unit, merged[i : i + max_lines], series))
     if not panels:
@@ -328,14 +367,13 @@ def plot_quantities(
         if groups:
             ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
     axes[-1, 0].set_xlabel(t_label)
-    if events or restarts:
-        axes[0, 0].set_title(
-            "dotted grey: time events and restarts; dashed red: located switches",
-            fontsize=8,
-            loc="left",
-        )
-    if title:
-        fig.suptitle(title, fontsize=10)
+    note = (
+        "dotted grey: time events and restarts; dashed red: located switches"
+        if events or restarts
+        else ""
+    )
+    if title or note:
+        fig.suptitle("\n".join(x for x in (title, note) if x), fontsize=9)
     fig.tight_layout()
     path = Path(path)
     try:

@@ -117,7 +117,6 @@ def _figures(results_csv, units: str) -> list:
         curve_label,
         default_selection,
         display,
-        merge_identical,
         read_run,
     )
 
@@ -145,12 +144,12 @@ def _figures(results_csv, units: str) -> list:
         for te in events:
             fig.add_vline(x=te / scale, line_dash="dash", line_color="#d62728", line_width=1)
 
-    for q, group in _panels(chosen, unit_of, data, units):
+    for q, merged in _panels(chosen, unit_of, data, units):
         series, shown = {}, "-"
-        for n in group:
-            series[n], shown = display(data[n], unit_of.get(n, ""), units)
+        for g in merged:
+            series[g[0]], shown = display(data[g[0]], unit_of.get(g[0], ""), units)
         fig = go.Figure()
-        for g in merge_identical(t, series):
+        for g in merged:
             fig.add_trace(go.Scatter(x=t, y=series[g[0]], mode="lines", name=curve_label(g, comps)))
         markers(fig)
         fig.update_layout(

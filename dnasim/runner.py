@@ -256,6 +256,8 @@ def run_plant(
     # step size, kept (3 floats a step) for steps.csv in case the solver hands nothing over
     rows_are_steps = sim.output_interval is None
 
+    time_events = set(plant.assemble().tstops(sim.t_start, sim.t_end))
+
     def write(t, y, yp, restart):
         try:
             w = state["writer"]
@@ -270,7 +272,10 @@ def run_plant(
                     results_path, header, flush_rows=flush_rows, flush_seconds=flush_seconds
                 )
                 state["writer"], state["row"] = w, row
-            values = state["row"](t, y, yp)
+            # the left limit at a time event: time functions (a set-point step) are
+            # evaluated just before it, as the state y is
+            t_row = math.nextafter(t, -math.inf) if not restart and t in time_events else t
+            values = state["row"](t_row, y, yp)
             w.write_row([t, *values, float(restart)])
         except OutputError as exc:
             state["output_error"] = exc

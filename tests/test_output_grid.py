@@ -104,3 +104,25 @@ def test_grid_without_events_writes_each_time_once():
     for t in (0.0, 0.4, 1.0, 2.6, 3.0):
         grid(t, np.array([t]), np.array([1.0]))
     assert rows == [(0.0, 0), (1.0, 0), (2.0, 0), (3.0, 0)]
+
+
+def test_left_limit_row_evaluates_time_functions_before_the_event(tmp_path, monkeypatch):
+    """At the set-point step (2 min) the row before holds the old set point in every
+    column, the row after the new one. No component outputs a time function yet, so
+    the PIController gets the set-point output proposed to the lead."""
+    from dnasim.components.base import Output
+    from dnasim.components.controller import PIController
+
+    monkeypatch.setattr(PIController, "outputs", lambda self: [Output("setpoint", "K")])
+    monkeypatch.setattr(
+        PIController, "output_values", lambda self, t, x, xp: [self.param_at("setpoint", t)]
+    )
+    text = (Path(__file__).parents[1] / "plants" / "attemperator.toml").read_text()
+    text = text.replace('t_end = "20 min"', 't_end = "3 min"')
+    for extra in ("", 'output_interval = "10 s"\n'):
+        outcome = run_plant(loads(text.replace("rtol", extra + "rtol", 1), "att.toml"), tmp_path)
+        assert outcome.success
+        _, _, d = read_results_csv(tmp_path / "results.csv")
+        at = np.flatnonzero(d["time"] == 120.0)
+        assert list(d["pi.setpoint"][at]) == [723.15, 713.15]  # 450 and 440 degC exactly
+        assert list(d["restart"][at]) == [0.0, 1.0]

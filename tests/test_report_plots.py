@@ -123,3 +123,19 @@ def test_set_point_and_limits_are_plotted_when_recorded(tmp_path):
     )
     files = write_run_plots(tmp_path / "results.csv", units="engineering")
     assert files == [tmp_path / "variables.png"]
+
+
+def test_bands_that_do_not_overlap_get_their_own_panel():
+    from dnasim.plots import split_bands
+
+    data = {
+        "water": np.full(5, 473.0),
+        "att": np.array([713.0, 713.0, 723.0, 740.0, 755.0]),
+        "steam": np.array([773.0, 773.0, 800.0, 873.0, 873.0]),
+    }
+    # water is 240 K below the rest, 60 % of the 400 K span: its own band
+    curves = [["att"], ["water"], ["steam"]]
+    assert split_bands(curves, data) == [[["att"], ["steam"]], [["water"]]]
+    # curves that overlap stay together
+    data["water"] = np.linspace(700.0, 760.0, 5)
+    assert split_bands(curves, data) == [curves]
