@@ -301,6 +301,22 @@ def split_bands(groups: Sequence[Sequence[str]], data: dict, gap: float = 0.2) -
     return [[list(groups[i]) for i in sorted(b)] for b in reversed(bands)]
 
 
+def y_limits(curves, rel: float = 1e-3):
+    """Axis limits that do not blow round-off up: at least ``rel`` of the largest
+    magnitude (0.36 degC around 360 degC), centred on the data; None when the data
+    span more than that (let the plotting library choose)."""
+    vals = np.concatenate([np.asarray(c, dtype=float).ravel() for c in curves] or [[]])
+    vals = vals[np.isfinite(vals)]
+    if not vals.size:
+        return None
+    lo, hi = float(vals.min()), float(vals.max())
+    min_span = max(rel * float(np.abs(vals).max()), 1e-12)
+    if hi - lo >= min_span:
+        return None
+    mid = (lo + hi) / 2
+    return mid - min_span / 2, mid + min_span / 2
+
+
 def _panels(names, unit_of, data, units=None):
     """(quantity, [group, ...]) per panel, a group being the names of coinciding
     curves (:func:`merge_identical`, over the whole quantity); quantities in
@@ -363,6 +379,10 @@ def plot_quantities(
         for te in events:
             ax.axvline(te / t_scale, color="tab:red", ls="--", lw=0.8)
         ax.set_ylabel(f"{q}\n[{axis_unit(q, u)}]")
+        ax.ticklabel_format(axis="y", useOffset=False)
+        lim = y_limits([series[g[0]] for g in groups])
+        if lim is not None:
+            ax.set_ylim(*lim)
         ax.grid(True, alpha=0.3)
         if groups:
             ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))

@@ -118,6 +118,7 @@ def _figures(results_csv, units: str) -> list:
         default_selection,
         display,
         read_run,
+        y_limits,
     )
 
     names, unit_of, data, steps, events, restarts = read_run(results_csv)
@@ -152,6 +153,9 @@ def _figures(results_csv, units: str) -> list:
         for g in merged:
             fig.add_trace(go.Scatter(x=t, y=series[g[0]], mode="lines", name=curve_label(g, comps)))
         markers(fig)
+        lim = y_limits([series[g[0]] for g in merged])
+        if lim is not None:
+            fig.update_yaxes(range=list(lim))
         fig.update_layout(
             xaxis_title=t_label,
             yaxis_title=f"{q} [{axis_unit(q, shown)}]",

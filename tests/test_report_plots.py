@@ -139,3 +139,13 @@ def test_bands_that_do_not_overlap_get_their_own_panel():
     # curves that overlap stay together
     data["water"] = np.linspace(700.0, 760.0, 5)
     assert split_bands(curves, data) == [curves]
+
+
+def test_flat_curves_do_not_magnify_round_off():
+    from dnasim.plots import y_limits
+
+    flat = 633.15 + 1e-10 * np.sin(np.arange(50))
+    lo, hi = y_limits([flat])
+    # at least 1e-3 of the magnitude: 0.63 K around 633 K
+    assert hi - lo == pytest.approx(0.63315) and lo < 633.15 < hi
+    assert y_limits([np.linspace(400.0, 500.0, 5)]) is None
