@@ -160,6 +160,7 @@ def _figures(results_csv, units: str) -> list:
             xaxis_title=t_label,
             yaxis_title=f"{q} [{axis_unit(q, shown)}]",
             height=380,
+            showlegend=True,  # also for one curve: its name
             **layout,
         )
         figs.append(fig)
