@@ -144,6 +144,15 @@ class AssembledDAE:
     # ------------------------------------------------------------------ build
     def _build(self):
         plant = self.plant
+        # each component learns the units of the signals linked to its inputs, so that
+        # quantities in the unit of a measured signal (a controller's set point and
+        # error) carry it into the results
+        for comp in plant.components.values():
+            comp.input_units = {}
+        for (dname, inp), (sname, out) in plant.links.items():
+            src = plant.components[sname]
+            unit = next((s.unit for s in src.signal_outputs() if s.name == out), "1")
+            plant.components[dname].input_units[inp] = unit
         names, units, nominal, owner, accumulator = [], [], [], [], []
         self.node_index = {}
         for node in plant.node_names():
