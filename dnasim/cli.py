@@ -204,6 +204,15 @@ _COOLPROP_CACHE_OPTION = click.option(
 )
 
 
+_UNITS_OPTION = click.option(
+    "--units",
+    type=click.Choice(["si", "engineering"]),
+    default="si",
+    show_default=True,
+    help="Plot units: SI, or engineering (degC, bar, t/h, kJ/kg, MW).",
+)
+
+
 @main.command(context_settings=CONTEXT_SETTINGS)
 @click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
 @click.option(
@@ -245,6 +254,13 @@ _COOLPROP_CACHE_OPTION = click.option(
     help="Variables to plot (implies --plot): names or shell patterns (pipe1.*, *.T_out); "
     "repeat the option or separate with commas. Default: temperatures and controller outputs.",
 )
+@_UNITS_OPTION
+@click.option(
+    "--report",
+    "html_report",
+    is_flag=True,
+    help="Write report.html: interactive plots, events, steps, statistics, plant structure.",
+)
 @_COOLPROP_CACHE_OPTION
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
 def run(
@@ -258,6 +274,8 @@ def run(
     output_interval,
     plot,
     var_patterns,
+    units,
+    html_report,
     coolprop_cache,
     quiet,
 ):
@@ -282,6 +300,8 @@ def run(
             var_patterns,
             coolprop_cache,
             quiet,
+            units=units,
+            html_report=html_report,
         )
     except (KeyboardInterrupt, _Terminate) as exc:  # outside the integration itself
         what = "SIGTERM" if isinstance(exc, _Terminate) else "Ctrl-C"
@@ -307,6 +327,8 @@ def _run(
     var_patterns,
     coolprop_cache,
     quiet,
+    units="si",
+    html_report=False,
 ):
     import math
 
@@ -383,12 +405,22 @@ def _run(
         from dnasim.runner import write_plots
 
         try:
-            files = write_plots(outcome, out, patterns)
+            files = write_plots(outcome, out, patterns, units=units)
         except Exception as exc:  # a plot must not hide the result of the run
             click.echo(f"dnasim: warning: plotting failed: {type(exc).__name__}: {exc}", err=True)
             files = []
         if not quiet:
             for f in files:
+                click.echo(f"wrote {f}")
+    if html_report and outcome.t_reached is not None and outcome.status != "output-error":
+        from dnasim.report import write_report
+
+        try:
+            f = write_report(outcome, loaded, out, units=units)
+        except Exception as exc:  # a report must not hide the result of the run
+            click.echo(f"dnasim: warning: report failed: {type(exc).__name__}: {exc}", err=True)
+        else:
+            if not quiet:
                 click.echo(f"wrote {f}")
     if not quiet or not outcome.success:
         click.echo(outcome.summary())
@@ -516,16 +548,20 @@ def components(name):
     "out_file",
     default=None,
     metavar="FILE.png",
-    help="Output image [default: next to the CSV, plot_<vars>.png].",
+    help="Output image [default: variables.png and steps.png next to the CSV, as run --plot].",
 )
-def plot_cmd(results_csv, patterns, var_patterns, out_file):
+@_UNITS_OPTION
+def plot_cmd(results_csv, patterns, var_patterns, out_file, units):
     """Re-plot saved results: the variables matching the patterns over time, and,
-    when steps.csv is next to the CSV, step size and order over time."""
-    from dnasim.output import read_results_csv, select_variables
+    when steps.csv is next to the CSV, step size and order over time. The same
+    files and markers as ``dnasim run --plot``."""
+    from dnasim.errors import OutputError
+    from dnasim.output import read_results_csv
+    from dnasim.plots import write_run_plots
 
     path = Path(results_csv)
     try:
-        names, units, data = read_results_csv(path)
+        names, units_of, data = read_results_csv(path)
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
     except (OSError, ValueError, StopIteration) as exc:
@@ -534,49 +570,80 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file):
         raise InputError(f"{path}: the first column must be 'time [s]'")
     pats = _split_patterns(var_patterns) + list(patterns)
     variables = [n for n in names[1:]]
-    chosen = select_variables(variables, pats) if pats else _default_vars(variables)
-    if not chosen:
-        raise InputError(
-            f"{path}: no variable matches {' '.join(pats)}; variables: "
-            + ", ".join(variables[:20])
-            + (" ..." if len(variables) > 20 else "")
-        )
-    from dnasim.errors import OutputError
-    from dnasim.output import plot_steps, plot_variables
-
-    target = Path(out_file) if out_file else path.with_name("plot_variables.png")
     try:
-        plot_variables(data["time"], data, chosen, units, target, title=str(path))
+        files = write_run_plots(path, pats, units=units, variables_path=out_file)
     except OutputError as exc:
         raise InputError(str(exc)) from None
-    except ValueError as exc:  # e.g. an image format matplotlib does not know
-        raise InputError(f"option --output: cannot write {target}: {exc}") from None
-    click.echo(f"wrote {target}")
-    steps = path.with_name("steps.csv")
-    if steps.exists() and out_file is None:
-        import csv
-
-        try:
-            with open(steps, newline="") as f:
-                rows = [
-                    (float(r["time"]), float(r["step_size"]), float(r["order"]))
-                    for r in csv.DictReader(f)
-                ]
-        except (OSError, ValueError, KeyError):
-            rows = []
-        if rows:
-            target2 = path.with_name("plot_steps.png")
-            try:
-                plot_steps(rows, target2, title=str(steps))
-            except OutputError as exc:
-                raise InputError(str(exc)) from None
-            click.echo(f"wrote {target2}")
+    except ValueError as exc:
+        if str(exc).startswith("no variable matches"):
+            raise InputError(
+                f"{path}: no variable matches {' '.join(pats)}; variables: "
+                + ", ".join(variables[:20])
+                + (" ..." if len(variables) > 20 else "")
+            ) from None
+        # e.g. an image format matplotlib does not know
+        raise InputError(f"option --output: cannot write {out_file}: {exc}") from None
+    for f in files:
+        click.echo(f"wrote {f}")
 
 
 def _default_vars(names):
     from dnasim.runner import default_plot_variables
 
     return default_plot_variables(names)
+
+
+# --------------------------------------------------------------------------- linearize
+
+
+@main.command(context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+@click.option(
+    "--inputs",
+    "inputs",
+    required=True,
+    metavar="LIST",
+    help="Comma-separated inputs: parameters (steam.T) or signals held as inputs (spray_valve.z).",
+)
+@click.option(
+    "--outputs", "outputs", required=True, metavar="LIST", help="Comma-separated results names."
+)
+@click.option(
+    "--at",
+    "at",
+    default="steady",
+    metavar="steady|T",
+    help='Operating point: the steady state, or the simulated state at time T (e.g. "5 min").',
+)
+@click.option(
+    "-o", "--output", "out_dir", default=None, metavar="DIR", help="Write linear.npz/.mat here."
+)
+@click.option("--all-states", is_flag=True, help="Keep states no output depends on.")
+def linearize(plant_file, inputs, outputs, at, out_dir, all_states):
+    """Linearise PLANT.toml: x' = A x + B u, y = C x + D u; print eigenvalues, time
+    constants, damping and DC gains; with -o write linear.npz (+ linear_A.npz ...,
+    scipy.sparse) and linear.mat."""
+    from dnasim.errors import DnasimError
+    from dnasim.linearize import linearize as _linearize
+
+    loaded = _load(plant_file)
+    t = None if at.strip().lower() == "steady" else _parse_option_quantity(at, "s", "--at")
+    try:
+        lm = _linearize(
+            loaded,
+            _split_patterns([inputs]),
+            _split_patterns([outputs]),
+            t=t,
+            keep_all_states=all_states,
+        )
+    except DnasimError as exc:
+        raise InputError(f"{plant_file}: {exc}") from None
+    click.echo(lm.summary())
+    if out_dir:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        for f in (lm.save_npz(out / "linear.npz"), lm.save_mat(out / "linear.mat")):
+            click.echo(f"wrote {f}")
 
 
 if __name__ == "__main__":  # pragma: no cover

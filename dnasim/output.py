@@ -63,6 +63,7 @@ RESULT_FILES = (
     "variables.png",
     "steps.png",
     "report.txt",
+    "report.html",
 )
 
 _O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)

@@ -23,15 +23,16 @@ from dnasim.output import (
     StreamingCSV,
     clear_results,
     column_header,
-    plot_steps,
-    plot_variables,
-    read_results_csv,
-    select_variables,
     write_events_csv,
     write_steps_csv,
 )
 
+#: last column of results.csv: 1 on the row of the state right after a discontinuity
+#: (the row before it, at the same time, holds the left limit)
+RESTART_COLUMN = "restart"
+
 __all__ = [
+    "RESTART_COLUMN",
     "RunOutcome",
     "run_plant",
     "solve_streaming",
@@ -158,9 +159,12 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False):
     dense output in the result; otherwise a solver that has ``keep_output`` is
     asked not to keep the rows at all.
 
-    The same System, start and tolerances as ``dnasim.simulation``, but for
-    streaming: no dense output, no ``Results`` table. ``sim.t_eval()`` checks the
-    number of output points against its limit before the grid exists.
+    The same System, start and tolerances as ``dnasim.simulation.simulate``, but for streaming:
+    no dense output (the Nordsieck pieces of every step), no ``Results``
+    table, and ``sim.max_steps`` reaches ``solve_dae``. With ``output_interval`` the
+    solver generates the grid as it goes and hands over both sides of every
+    discontinuity (two points at the same t); without it, every accepted step and,
+    after a restart, the state right after it.
     """
     from dnasim.backends import NordsieckBDF, Problem
     from dnasim.start import initial_values
@@ -254,31 +258,40 @@ def run_plant(
     # step size, kept (3 floats a step) for steps.csv in case the solver hands nothing over
     rows_are_steps = sim.output_interval is None
 
-    def callback(t, y, yp):
+    time_events = set(system.tstops(sim.t_start, sim.t_end))
+
+    def write(t, y, yp, restart):
         try:
             w = state["writer"]
             if w is None:
                 names, units, row = plant_output_layout(system)
-                header = [column_header("time", "s")] + [
-                    column_header(n, units.get(n)) for n in names
-                ]
+                header = (
+                    [column_header("time", "s")]
+                    + [column_header(n, units.get(n)) for n in names]
+                    + [column_header(RESTART_COLUMN, "-")]
+                )
                 w = StreamingCSV(
                     results_path, header, flush_rows=flush_rows, flush_seconds=flush_seconds
                 )
                 state["writer"], state["row"] = w, row
-            values = state["row"](t, y, yp)
-            w.write_row([t, *values])
+            # the left limit at a time event: time functions (a set-point step) are
+            # evaluated just before it, as the state y is
+            t_row = math.nextafter(t, -math.inf) if not restart and t in time_events else t
+            values = state["row"](t_row, y, yp)
+            w.write_row([t, *values, float(restart)])
         except OutputError as exc:
             state["output_error"] = exc
             # a DAEError stops the solver, which then hands over its partial result
             raise DAEError(str(exc)) from exc
         t = float(t)
-        if rows_are_steps:
-            prev = state["prev_t"]
-            if prev is not None and t > prev:
-                state["steps"].append((t, t - prev, math.nan))
-            state["prev_t"] = t
+        prev = state["prev_t"]
+        if rows_are_steps and prev is not None and t > prev:
+            state["steps"].append((t, t - prev, math.nan))
+        state["prev_t"] = t
         bar.update(t)
+
+    def callback(t, y, yp):  # a repeated time is the state after a restart
+        write(t, y, yp, int(state["prev_t"] is not None and float(t) == state["prev_t"]))
 
     status, message, result = "finished", "", None
     try:
@@ -385,24 +398,12 @@ def default_plot_variables(names, limit: int = 12) -> list[str]:
     return chosen or list(names)[: min(limit, 8)]
 
 
-def write_plots(outcome: RunOutcome, out_dir, patterns) -> list[Path]:
-    out = Path(out_dir)
-    names, units, data = read_results_csv(out / "results.csv")
-    variables = names[1:]
-    chosen = (
-        select_variables(variables, patterns) if patterns else default_plot_variables(variables)
-    )
-    if patterns and not chosen:
-        raise ValueError(f"no variable matches {' '.join(patterns)}")
-    ev_times = [e.get("t") for e in outcome.event_log if e.get("t") is not None]
-    files = [
-        plot_variables(
-            data["time"], data, chosen, units, out / "variables.png", event_times=ev_times
-        )
-    ]
-    if outcome.step_history is not None and len(outcome.step_history):
-        files.append(plot_steps(outcome.step_history, out / "steps.png", event_times=ev_times))
-    return files
+def write_plots(outcome: RunOutcome, out_dir, patterns, units: str = "si") -> list[Path]:
+    """``variables.png`` and ``steps.png`` from the files the run wrote (the same
+    function as ``dnasim plot``: :func:`dnasim.plots.write_run_plots`)."""
+    from dnasim.plots import write_run_plots
+
+    return write_run_plots(Path(out_dir) / "results.csv", patterns, units=units)
 
 
 # --------------------------------------------------------------------------- check / components

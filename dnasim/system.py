@@ -159,6 +159,7 @@ class System:
         self.components = dict(plant.components)
         self.node_names = list(plant.node_names())
         self.connections = dict(plant.connections)  # (component, port) -> node
+        self.links = dict(plant.links)  # (component, input) -> (component, output)
         self.node_media = dict(node_media or {})
         self.port_media = dict(port_media or {})
         #: discrete modes, component name -> {key: value}; the components read and
@@ -168,6 +169,15 @@ class System:
 
     # ------------------------------------------------------------------ build
     def _build(self, plant):
+        # each component learns the units of the signals linked to its inputs, so that
+        # quantities in the unit of a measured signal (a controller's set point and
+        # error) carry it into the results
+        for comp in plant.components.values():
+            comp.input_units = {}
+        for (dname, inp), (sname, out) in plant.links.items():
+            src = plant.components[sname]
+            unit = next((s.unit for s in src.signal_outputs() if s.name == out), "1")
+            plant.components[dname].input_units[inp] = unit
         names, units, nominal, owner, accumulator = [], [], [], [], []
         self.node_index = {}
         for node in plant.node_names():

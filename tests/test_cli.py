@@ -199,8 +199,8 @@ def test_plot_command_replots_saved_results(runs, tmp_path):
     assert res.exit_code == 0, output_of(res)
     assert target.read_bytes()[:4] == b"\x89PNG"
     res = invoke("plot", out / "results.csv", "n_mix.T")  # patterns as arguments
-    assert res.exit_code == 0 and (out / "plot_variables.png").exists()
-    assert (out / "plot_steps.png").exists()
+    assert res.exit_code == 0 and (out / "variables.png").exists()
+    assert (out / "steps.png").exists()
 
 
 def test_plot_with_unknown_variable_is_bad_input(runs):

@@ -4,7 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from dnasim.components.base import Component, Equation, Param, SignalPort, Switch, Variable
+from dnasim.components.base import (
+    Component,
+    Equation,
+    Output,
+    Param,
+    SignalPort,
+    Switch,
+    Variable,
+)
 
 
 class PIController(Component):
@@ -88,9 +96,33 @@ class PIController(Component):
         """The mode, from the System-owned dict (``LocalVector.modes``)."""
         return x.modes.get("mode", "free")
 
+    @property
+    def measured_unit(self) -> str:
+        """Unit of the linked measured signal ("1" before the plant is assembled)."""
+        return getattr(self, "input_units", {}).get("measured", "1") or "1"
+
+    @property
+    def error_unit(self) -> str:
+        """Unit of the control error: a difference of the measured unit (a temperature
+        difference is "delta_K", so that it is never shifted by 273.15 for display)."""
+        u = self.measured_unit
+        return "delta_K" if u == "K" else u
+
+    def outputs(self):
+        """The set point and the output limits, recorded in the results for plots."""
+        return [
+            Output("setpoint", self.measured_unit, "set point, in the unit of the measured signal"),
+            Output("z_min", "1", "lower output limit"),
+            Output("z_max", "1", "upper output limit"),
+        ]
+
+    def output_values(self, t, x, xp):
+        P = self.params
+        return [self.param_at("setpoint", t), P["z_min"], P["z_max"]]
+
     def variables(self):
         return [
-            Variable("e", "1", self.params["measured_nominal"] * 0.01, doc="error"),
+            Variable("e", self.error_unit, self.params["measured_nominal"] * 0.01, doc="error"),
             Variable("m_p", "1", 1.0, doc="proportional part"),
             Variable("m_I", "1", 1.0, doc="integral part"),
             Variable("z", "1", 1.0, doc="output"),

@@ -19,13 +19,19 @@ Newton. The Jacobian dF/du takes the columns of dF/dy for the y unknowns and of
 dF/dy' for the y' unknowns; it is built by finite differences grouped by the
 column colouring of ``linear_algebra.IterationMatrix`` and factorised by LU. It
 is refreshed at every iteration. The Newton step d = -J^{-1} F is globalised by
-backtracking on the row-scaled residual psi(u) = || F(u) / r ||_2, with
-r_i = max_j |J_ij| / uw_j taken from the first iteration's Jacobian (each residual
-in tolerance units of the unknowns it sets): u + lam d is accepted when
-psi <= (1 - 1e-4 lam) psi(u), halving lam down to 1e-5. (IDA backtracks on the
-natural-level function ||J^{-1} F||; from a plant's rough steady-start guess that
-test stalled, or led the iterates into a region where a controller saturates and
-the Jacobian is singular, where psi converged: superheater_line.toml.)
+backtracking: u + lam d is accepted when the merit function falls by the Armijo
+factor (1 - 1e-4 lam), halving lam down to 1e-5. Two merit functions are tried in
+turn, each from the starting values:
+
+1. the natural-level function phi(u) = || J^{-1} F(u) ||_uw (the scaled Newton
+   step, IDA's line search), affine invariant;
+2. if that fails, the row-scaled residual psi(u) = || F(u) / r ||_2 with
+   r_i = max_j |J_ij| / uw_j from the first Jacobian (each residual in tolerance
+   units of the unknowns it sets).
+
+Neither alone was enough for the plants: from a rough steady-start guess phi
+stalled on superheater_line.toml where psi converged, and psi stalled on a steam
+network (tests/field/steam_network_step.toml) where phi converged.
 
 Convergence when, at the current iterate,
 
@@ -35,9 +41,10 @@ Convergence when, at the current iterate,
   |d_j| uw_j > 0.0033, i.e. no representable progress is left, or
 - F is exactly zero.
 
-A line search that cannot reduce psi at a point already within the
-integrator's tolerance (||d||_uw <= 1) is accepted too: the leftover is
-round-off, and the BDF corrector absorbs it.
+A line search that cannot reduce the merit, or a Newton that runs out of
+iterations, at a point already within the integrator's tolerance
+(||d||_uw <= 1) is accepted too: the leftover is round-off of the property
+functions, and the BDF corrector absorbs it.
 """
 
 from __future__ import annotations
@@ -129,62 +136,34 @@ def solve_consistent(
                 _nonfinite_equations(residual, t, y, yp, equation_names),
             )
         )
-    problem = ""
-    scaled = None
-    rows = None  # row scales of psi, fixed at the first iteration
-    uw = np.ones_like(y)
+    y0, yp0, f0 = y, yp, f
+    failures = []
     try:
-        for _ in range(max_iters):
-            if not np.any(f):
+        for merit in ("natural", "residual"):
+            ok, y, yp, f, scaled, uw, problem = _newton(
+                residual,
+                t,
+                y0,
+                yp0,
+                f0,
+                y_unknown,
+                ymask,
+                ypmask,
+                rtol,
+                atol,
+                h_scale,
+                matrix,
+                max_iters,
+                merit,
+                what,
+            )
+            if ok:
                 return y, yp
-            uw = 1.0 / (rtol * np.abs(y) + atol) * (ymask + h_scale * ypmask)
-            u = np.where(y_unknown, y, yp)
-            jac = _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix)
-            try:
-                matrix.factorize()
-            except SingularMatrixError as exc:
-                raise DAEError(
-                    _message(
-                        t,
-                        what,
-                        "the Jacobian of F with respect to the unknowns (y of the algebraic, y' "
-                        f"of the differential variables) is singular. {exc} If some variables "
-                        "are algebraic (their derivatives appear nowhere), pass them as "
-                        "`algebraic`",
-                    )
-                ) from None
-            scaled = _scaled_residuals(jac, f, uw)
-            d = matrix.solve(-f)
-            dw = d * uw
-            phi = _norm(dw)
-            if not np.isfinite(phi):
-                problem = "the Newton step is not finite"
-                break
-            if phi <= TOLERANCE or _at_roundoff(d, dw, u):
-                return _update(y, yp, d, 1.0, ymask, ypmask)
-            # Backtracking on the row-scaled residual psi (see the module doc).
-            if rows is None:
-                rows = _row_scales(jac, uw)
-            psi = float(np.linalg.norm(f / rows))
-            lam = 1.0
-            while True:
-                y_new, yp_new = _update(y, yp, d, lam, ymask, ypmask)
-                f_new = _evaluate(residual, t, y_new, yp_new)
-                if f_new is not None:
-                    if float(np.linalg.norm(f_new / rows)) <= (1.0 - ARMIJO * lam) * psi:
-                        break
-                lam *= 0.5
-                if lam < LAMBDA_MIN:
-                    break
-            if lam < LAMBDA_MIN:
-                if phi <= WITHIN_TOLERANCE:
-                    # Within the integrator's tolerance and no descent left: round-off.
-                    return _update(y, yp, d, 1.0, ymask, ypmask)
-                problem = "the line search could not reduce the scaled residual"
-                break
-            y, yp, f = y_new, yp_new, f_new
-        else:
-            problem = f"Newton did not converge in {max_iters} iterations"
+            failures.append((problem, f, scaled, uw))
+        # report the attempt that came closer
+        problem, f, scaled, uw = min(
+            failures, key=lambda c: np.inf if c[2] is None else float(np.max(c[2], initial=0.0))
+        )
         detail = _worst(f, scaled, uw, matrix, equation_names, variable_names)
     finally:
         matrix.matrix = None  # the integrator must build its own iteration matrix
@@ -193,6 +172,94 @@ def solve_consistent(
             t, what, f"they are inconsistent and could not be made consistent ({problem})", detail
         )
     )
+
+
+def _newton(
+    residual,
+    t,
+    y,
+    yp,
+    f,
+    y_unknown,
+    ymask,
+    ypmask,
+    rtol,
+    atol,
+    h_scale,
+    matrix,
+    max_iters,
+    merit,
+    what,
+):
+    """Globalised Newton from (y, yp); returns (ok, y, yp, F, scaled residuals, uw, problem).
+
+    merit "natural": backtracking on phi = ||J^{-1} F||_uw at the current Jacobian
+    (IDA's line search); "residual": on psi = ||F / r||_2 with the row scales r of
+    the first Jacobian (see the module doc). Raises DAEError for a singular Jacobian.
+    """
+    scaled = None
+    rows = None
+    phi = np.inf
+    uw = np.ones_like(y)
+    for _ in range(max_iters):
+        if not np.any(f):
+            return True, y, yp, f, scaled, uw, ""
+        uw = 1.0 / (rtol * np.abs(y) + atol) * (ymask + h_scale * ypmask)
+        u = np.where(y_unknown, y, yp)
+        jac = _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix)
+        try:
+            matrix.factorize()
+        except SingularMatrixError as exc:
+            raise DAEError(
+                _message(
+                    t,
+                    what,
+                    "the Jacobian of F with respect to the unknowns (y of the algebraic, y' "
+                    f"of the differential variables) is singular. {exc} If some variables "
+                    "are algebraic (their derivatives appear nowhere), pass them as "
+                    "`algebraic`",
+                )
+            ) from None
+        scaled = _scaled_residuals(jac, f, uw)
+        d = matrix.solve(-f)
+        dw = d * uw
+        phi = _norm(dw)
+        if not np.isfinite(phi):
+            return False, y, yp, f, scaled, uw, "the Newton step is not finite"
+        if phi <= TOLERANCE or _at_roundoff(d, dw, u):
+            y, yp = _update(y, yp, d, 1.0, ymask, ypmask)
+            return True, y, yp, f, scaled, uw, ""
+        if merit == "residual":
+            if rows is None:
+                rows = _row_scales(jac, uw)
+            psi = float(np.linalg.norm(f / rows))
+        lam = 1.0
+        while True:
+            y_new, yp_new = _update(y, yp, d, lam, ymask, ypmask)
+            f_new = _evaluate(residual, t, y_new, yp_new)
+            if f_new is not None:
+                if merit == "natural":
+                    better = _norm(matrix.solve(-f_new) * uw) <= (1.0 - ARMIJO * lam) * phi
+                else:
+                    better = float(np.linalg.norm(f_new / rows)) <= (1.0 - ARMIJO * lam) * psi
+                if better:
+                    break
+            lam *= 0.5
+            if lam < LAMBDA_MIN:
+                break
+        if lam < LAMBDA_MIN:
+            if phi <= WITHIN_TOLERANCE:
+                # Within the integrator's tolerance and no descent left: round-off.
+                y, yp = _update(y, yp, d, 1.0, ymask, ypmask)
+                return True, y, yp, f, scaled, uw, ""
+            return False, y, yp, f, scaled, uw, "the line search could not reduce the residual"
+        y, yp, f = y_new, yp_new, f_new
+    if phi <= WITHIN_TOLERANCE:
+        # Newton creeps at the level of the property functions' round-off: the state
+        # is consistent to within the integrator's tolerance, and its corrector
+        # absorbs the rest.
+        return True, y, yp, f, scaled, uw, ""
+    return False, y, yp, f, scaled, uw, f"Newton did not converge in {max_iters} iterations"
 
 
 def _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix):
