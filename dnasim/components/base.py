@@ -49,7 +49,7 @@ from __future__ import annotations
 import inspect
 import textwrap
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -230,16 +230,23 @@ class Variable:
 
 @dataclass(frozen=True)
 class Equation:
-    """One scalar residual equation.
+    """One scalar residual equation, declared once: its name, its dependencies and
+    (for components that use the base ``residual``) the function that evaluates it.
 
     y:  local names of the variables it touches;
-    yp: local names of the variables whose time derivative it touches.
+    yp: local names of the variables whose time derivative it touches;
+    unit: the unit of the residual (e.g. "W", "kg/s");
+    residual: ``f(t, x, xp) -> float``. When every equation of a component has one,
+    ``Component.residual`` is derived from the list (in its order), so the docs
+    (``dnasim components``), the sparsity and the residual come from one place.
     """
 
     name: str
     y: tuple[str, ...] = ()
     yp: tuple[str, ...] = ()
     doc: str = ""
+    unit: str = ""
+    residual: Callable | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass
@@ -494,8 +501,25 @@ class Component:
     def equations(self) -> list[Equation]:
         return []
 
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_declared", None)  # closures; rebuilt from equations() on first use
+        return state
+
     def residual(self, t: float, x: LocalVector, xp: LocalVector) -> np.ndarray:
-        raise NotImplementedError
+        """F of the component's equations: by default each declared
+        ``Equation.residual`` in the order of ``equations()`` (a component whose
+        equations carry no functions overrides this method)."""
+        eqs = self.__dict__.get("_declared")
+        if eqs is None:
+            eqs = self._declared = self.equations()
+            missing = [e.name for e in eqs if e.residual is None]
+            if missing:
+                raise NotImplementedError(
+                    f"component '{self.name}' ({type(self).__name__}): equation(s) "
+                    f"{', '.join(missing)} declare no residual function"
+                )
+        return np.array([e.residual(t, x, xp) for e in eqs], dtype=float)
 
     def switches(self) -> list[Switch]:
         return []

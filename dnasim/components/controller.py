@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from dnasim.components.base import (
     Component,
     Equation,
@@ -129,32 +127,47 @@ class PIController(Component):
         ]
 
     def equations(self):
+        P = self.params
         return [
-            Equation("error", y=("e", "measured")),
-            Equation("proportional", y=("m_p", "e")),
-            Equation("integral", y=("e",), yp=("m_I",)),
-            Equation("output", y=("z", "m_p", "m_I")),
+            Equation(
+                "error",
+                y=("e", "measured"),
+                doc="e = sign (measured - setpoint)   (10.13a)",
+                residual=lambda t, x, xp: (
+                    x["e"] - self.sign * (x["measured"] - self.param_at("setpoint", t))
+                ),
+            ),
+            Equation(
+                "proportional",
+                y=("m_p", "e"),
+                doc="m_p = Kp e",
+                residual=lambda t, x, xp: x["m_p"] - P["Kp"] * x["e"],
+            ),
+            Equation(
+                "integral",
+                y=("e",),
+                yp=("m_I",),
+                doc="dm_I/dt = KI e (0 while saturated with anti-windup)   (10.13c)",
+                residual=self._integral,
+            ),
+            Equation(
+                "output",
+                y=("z", "m_p", "m_I"),
+                doc="z = m_p + m_I (free), z_max (high), z_min (low)   (10.13b)",
+                residual=self._output,
+            ),
         ]
 
-    def residual(self, t, x, xp):
-        e = x["e"]
+    def _integral(self, t, x, xp):
         P = self.params
+        hold = P["anti_windup"] and self._mode(x) != "free"
+        return xp["m_I"] - (0.0 if hold else P["KI"] * x["e"])
+
+    def _output(self, t, x, xp):
         mode = self._mode(x)
-        hold = P["anti_windup"] and mode != "free"
         if mode == "free":
-            out = x["z"] - (x["m_p"] + x["m_I"])
-        elif mode == "high":
-            out = x["z"] - P["z_max"]
-        else:
-            out = x["z"] - P["z_min"]
-        return np.array(
-            [
-                e - self.sign * (x["measured"] - self.param_at("setpoint", t)),
-                x["m_p"] - P["Kp"] * e,
-                xp["m_I"] - (0.0 if hold else P["KI"] * e),
-                out,
-            ]
-        )
+            return x["z"] - (x["m_p"] + x["m_I"])
+        return x["z"] - (self.params["z_max"] if mode == "high" else self.params["z_min"])
 
     # ----------------------------------------------------------------- switches
     def _gain_sign(self):

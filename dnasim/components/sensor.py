@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from dnasim.components.base import Component, Equation, FluidPort, Param, SignalPort, Variable
 from dnasim.components.physics import properties
 
@@ -33,15 +31,32 @@ class TemperatureSensor(Component):
         return [Variable("T_s", "K", 300.0, doc="measured temperature")]
 
     def equations(self):
-        yp = ("T_s",) if self.params["tau"] > 0 else ()
-        return [Equation("lag", y=("T_s", "port.p", "port.h"), yp=yp)]
-
-    def residual(self, t, x, xp):
-        T, _, _ = properties(self.medium, [x["port.p"]], [x["port.h"]])
         tau = self.params["tau"]
         if tau > 0:
-            return np.array([tau * xp["T_s"] - (T[0] - x["T_s"])])
-        return np.array([x["T_s"] - T[0]])
+            return [
+                Equation(
+                    "lag",
+                    y=("T_s", "port.p", "port.h"),
+                    yp=("T_s",),
+                    unit="K",
+                    doc="tau dT_s/dt = T(p, h) - T_s",
+                    residual=lambda t, x, xp: tau * xp["T_s"] - (self._T(x) - x["T_s"]),
+                )
+            ]
+        return [
+            Equation(
+                "lag",
+                y=("T_s", "port.p", "port.h"),
+                unit="K",
+                doc="T_s = T(p, h) (tau = 0)",
+                residual=lambda t, x, xp: x["T_s"] - self._T(x),
+            )
+        ]
+
+    def _T(self, x):
+        """The fluid temperature at the port [K]."""
+        T, _, _ = properties(self.medium, [x["port.p"]], [x["port.h"]])
+        return T[0]
 
     def initial_guess(self, t0, x):
         if self.params["T0"] is not None:
