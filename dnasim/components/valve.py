@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from dnasim.components.base import Component, Equation, FluidPort, Param, SignalPort, Variable
 from dnasim.components.physics import valve_flow
 
@@ -87,17 +85,24 @@ class Valve(Component):
 
     def equations(self):
         dep = ("m", "inlet.p", "outlet.p") + (("z",) if self.opening_from_signal else ())
-        return [Equation("flow", y=dep)]
+        return [
+            Equation(
+                "flow",
+                y=dep,
+                unit="kg/s",
+                doc="m = C z_eff sqrt(dp) (regularised near dp = 0)",
+                residual=self._flow,
+            )
+        ]
 
     def opening(self, t, x):
         z = x["z"] if self.opening_from_signal else self.param_at("opening", t)
         leak = self.params["leakage"]
         return leak + (1.0 - leak) * z
 
-    def residual(self, t, x, xp):
+    def _flow(self, t, x, xp):
         dp = x["inlet.p"] - x["outlet.p"]
-        m = valve_flow(self.params["C"], self.opening(t, x), dp, self.params["dp_reg"])
-        return np.array([x["m"] - m])
+        return x["m"] - valve_flow(self.params["C"], self.opening(t, x), dp, self.params["dp_reg"])
 
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
