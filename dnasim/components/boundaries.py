@@ -68,6 +68,7 @@ class BoundaryStateError(ResidualDomainError):
     boundary, the time and the state. A ``ResidualDomainError``: inside a Newton
     iteration the solver cuts the step, and reports it when it persists."""
 
+
 _STATE_PARAMS = (
     Param(
         "h",
