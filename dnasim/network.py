@@ -351,7 +351,7 @@ class Plant:
         else:
             y0, yp0 = (np.array(v, dtype=float) for v in initial)
         t_init = time.perf_counter() - t_start
-        atol_vec = dae.atol_vector(atol, y0)
+        atol_vec = dae.atol_vector(atol, y0, yp0, t_end - t0)
         tstops = dae.tstops(t0, t_end)
         kwargs = dict(
             rtol=rtol,
