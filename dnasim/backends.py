@@ -59,7 +59,13 @@ class Problem:
 @dataclass
 class NordsieckBDF:
     """dnasim's own solver (``dnasim.solve_dae``): Nordsieck BDF orders 1..5 with
-    Milne's error estimate, modified Newton, switch location and restarts."""
+    Milne's error estimate, modified Newton, switch location and restarts.
+
+    ``exclude_algebraic_from_error`` (default True for plants, as in ``dnasim run``):
+    the algebraic variables (flows, pressures, node enthalpies) are left out of the
+    error test, DASPK's advice for index-1 problems; their error follows from the
+    differential states'. A liquid volume's pressure-flow mode has a time constant
+    of about 1e-10 s, which no useful step could otherwise pass after a restart."""
 
     rtol: float = RTOL
     atol_scaled: float = ATOL_SCALED
@@ -67,7 +73,7 @@ class NordsieckBDF:
     max_step: float = math.inf
     h0: float | None = None
     max_steps: int = 500_000
-    exclude_algebraic_from_error: bool = False
+    exclude_algebraic_from_error: bool = True
     dense_output: bool = True
     #: False: the rows go to the callback only (a solve_dae with ``keep_output``)
     keep_output: bool = True

@@ -126,7 +126,7 @@ def simulate(
         jac_sparsity=system.jac_sparsity,
         events=system.events,
         tstops=system.tstops(t0, t_end),
-        atol=system.atol_vector(solver.atol_scaled, y0),
+        atol=system.atol_vector(solver.atol_scaled, y0, yp0, t_end - t0),
         variable_names=list(system.names),
         equation_names=list(system.eq_names),
         t_eval=t_eval,

@@ -206,7 +206,7 @@ def test_disconnected_subnetworks_warn():
         (lambda: Pipe("p1", V=1.0, n_volumes=2.5), ["'p1'", "'n_volumes'", "integer"]),
         (lambda: Pipe("p1", V="big"), ["'p1'", "'V'", "number"]),
         (lambda: Valve("v", C=1.0, opening="half"), ["'v'", "'opening'"]),
-        (lambda: PressureBoundary("b", p=1e5, h=1e5, T=300.0), ["'b'", "either 'h' or 'T'"]),
+        (lambda: PressureBoundary("b", p=1e5, h=1e5, T=300.0), ["'b'", "one of 'h', 'T' or 'x'"]),
     ],
 )
 def test_bad_parameters_give_plant_errors(make, words):

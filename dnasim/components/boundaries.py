@@ -4,12 +4,31 @@ Each boundary has one fluid port ``port``; its flow ``m`` [kg/s] is positive
 INTO the plant (out of the boundary), always: a boundary that takes fluid out of
 the plant has m < 0. A boundary is source and sink at once:
 
-* fluid flowing into the plant carries the supply enthalpy h_supply [J/kg]:
-  ``h`` given, or h(p, T) with ``T`` given (p the boundary's pressure, or the
-  node pressure for a mass-flow boundary);
+* fluid flowing into the plant carries the supply enthalpy h_supply [J/kg],
+  given in one of three ways (p is the boundary's pressure, or the node pressure
+  for a mass-flow boundary):
+    ``h``  h_supply = h(t)                                         [J/kg]
+    ``T``  h_supply = h(p, T(t)), single phase only               [K]
+    ``x``  h_supply = h_liq(p) + x(t) (h_vap(p) - h_liq(p))       [-, 0..1]
+           (``medium.h_px``: a saturated supply, condensable media below the
+           critical pressure);
 * fluid flowing out of the plant is absorbed, whatever its state.
 
-A boundary with neither ``h`` nor ``T`` is a sink only. If flow ever goes into the
+(p, T) does not fix a state at the saturation temperature T_sat(p): there h(p, T)
+jumps by the latent heat (1 MJ/kg at 150 bar). A boundary given by ``T`` in a
+condensable medium therefore has a terminal switch g = T(t) - T_sat(p) [K] (T_c
+above the critical pressure): when the given T reaches T_sat(p) the run stops, at
+the located time, with a message naming the boundary and the state ("boundary
+'water' (PressureBoundary): at t = 98.85 s T = 342.16 °C is the saturation
+temperature at 150 bar; ... give h or quality x for a saturated supply"). It
+stops rather than restarting with the other phase's h because that jump is not
+physics: a feed heated through saturation passes through the two-phase states
+at constant T_sat (give h or x to model that), and a silent latent-heat step in
+the supply would be an artefact of how the supply was written down. Any other
+state the medium refuses (a T or x out of range, x for a gas) raises
+:class:`BoundaryStateError`, a ``ResidualDomainError`` naming the boundary.
+
+A boundary with none of ``h``, ``T``, ``x`` is a sink only. If flow ever goes into the
 plant through it (m > 1e-3 m_nominal), a terminal switch stops the run with a
 message naming the boundary and the time: give T or h for the reverse inflow.
 No temperature is invented.
@@ -29,8 +48,9 @@ from __future__ import annotations
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Param, Switch, Variable
-from dnasim.components.physics import M_EPS_REL, energy_in
-from dnasim.errors import PlantError
+from dnasim.components.physics import M_EPS_REL, energy_in, is_condensable
+from dnasim.errors import PlantError, ResidualDomainError
+from dnasim.media.errors import PropertyError
 
 #: a sink-only boundary stops the run when more than this fraction of m_nominal
 #: flows into the plant through it: the half-width of the upwind regularisation
@@ -38,6 +58,16 @@ from dnasim.errors import PlantError
 #: the enthalpy anyway. (1e-6 was tried: the solver's flow errors near zero flow,
 #: at the end of a line draining to a sink, exceeded it.)
 REVERSE_INFLOW_TOL = M_EPS_REL
+
+#: the ways of giving the supply state (one of them, or none for a sink only)
+SUPPLY_PARAMS = ("h", "T", "x")
+
+
+class BoundaryStateError(ResidualDomainError):
+    """The supply state of a boundary cannot be evaluated; the message names the
+    boundary, the time and the state. A ``ResidualDomainError``: inside a Newton
+    iteration the solver cuts the step, and reports it when it persists."""
+
 
 _STATE_PARAMS = (
     Param(
@@ -56,6 +86,16 @@ _STATE_PARAMS = (
         time_function=True,
     ),
     Param(
+        "x",
+        "1",
+        None,
+        "vapour quality of fluid flowing into the plant, 0 (saturated liquid) to 1 (saturated "
+        "vapour): a saturated supply at the boundary's pressure (condensable media)",
+        min=0.0,
+        max=1.0,
+        time_function=True,
+    ),
+    Param(
         "medium",
         "1",
         None,
@@ -70,9 +110,14 @@ class _Boundary(Component):
     REGISTER = False
 
     def setup(self):
-        if self.params["h"] is not None and self.params["T"] is not None:
-            raise PlantError(f"component '{self.name}': give either 'h' or 'T', not both")
-        self.has_supply = self.params["h"] is not None or self.params["T"] is not None
+        given = [k for k in SUPPLY_PARAMS if self.params[k] is not None]
+        if len(given) > 1:
+            raise PlantError(
+                f"component '{self.name}': give one of 'h', 'T' or 'x' for the supply state, "
+                f"not {' and '.join(repr(k) for k in given)}"
+            )
+        self.supply_by = given[0] if given else None
+        self.has_supply = self.supply_by is not None
 
     def fluid_ports(self):
         h_out = "h_supply" if self.has_supply else "port.h"
@@ -111,16 +156,45 @@ class _Boundary(Component):
         return out
 
     def supply_h(self, t, p):
-        """Enthalpy of the entering fluid [J/kg] (h given, or h(p, T))."""
-        if self.params["h"] is not None:
+        """Enthalpy of the entering fluid [J/kg]: h given, h(p, T) or h_px(p, x).
+
+        Raises :class:`BoundaryStateError` (naming this boundary, the time and the
+        state) when the medium cannot evaluate it."""
+        if self.supply_by == "h":
             return self.param_at("h", t)
-        return self.medium.h_pT(p, self.param_at("T", t))
+        try:
+            if self.supply_by == "x":
+                x = self.param_at("x", t)
+                return float(np.asarray(self.medium.h_px(p, x)).reshape(-1)[0])
+            return self.medium.h_pT(p, self.param_at("T", t))
+        except PropertyError as exc:
+            raise BoundaryStateError(self._state_message(t, p, exc)) from None
+
+    def _state_message(self, t, p, exc=None) -> str:
+        where = f"boundary '{self.name}' ({type(self).__name__}) at t = {t:.6g} s"
+        if self.supply_by == "T":
+            T = self.param_at("T", t)
+            T_sat = saturation_temperature(self.medium, p)
+            if T_sat is not None and abs(T - T_sat) <= 1e-3:
+                return (
+                    f"{where}: T = {T - 273.15:.2f} °C is the saturation temperature at "
+                    f"{p / 1e5:.6g} bar; (p, T) does not fix the supply state there (h jumps by "
+                    "the latent heat between saturated liquid and vapour); give h or quality x "
+                    "for a saturated supply"
+                )
+            state = f"p = {p / 1e5:.6g} bar, T = {T - 273.15:.6g} °C"
+        elif self.supply_by == "x":
+            state = f"p = {p / 1e5:.6g} bar, x = {self.param_at('x', t):.6g}"
+        else:
+            state = f"p = {p / 1e5:.6g} bar"
+        reason = f": {exc}" if exc is not None else ""
+        return f"{where}: cannot evaluate the supply enthalpy at {state}{reason}"
 
     def supply_equations(self, p_dep):
         if not self.has_supply:
             return []
-        dep = ("h_supply",) if self.params["h"] is not None else ("h_supply",) + p_dep
-        return [Equation("supply", y=dep, doc="h_supply = h or h(p, T)")]
+        dep = ("h_supply",) if self.supply_by == "h" else ("h_supply",) + p_dep
+        return [Equation("supply", y=dep, doc="h_supply = h, h(p, T) or h_px(p, x)")]
 
     def energy_flow(self, x):
         """E [W] into the plant (see the module doc)."""
@@ -140,6 +214,8 @@ class _Boundary(Component):
         return [xp["M_passed"] - x["m"], xp["H_passed"] - self.energy_flow(x)]
 
     def switches(self):
+        if self.supply_by == "T" and is_condensable(self.medium):
+            return [self._saturation_switch()]
         if self.has_supply:
             return []
         tol = REVERSE_INFLOW_TOL * self.params["m_nominal"]
@@ -162,6 +238,42 @@ class _Boundary(Component):
                 doc="m > tol: fluid would enter the plant with no given state",
             )
         ]
+
+    def _saturation_switch(self) -> Switch:
+        """Terminal switch g = T(t) - T_sat(p) [K] (see the module doc)."""
+        last = {}
+
+        def g(t, x, xp):
+            p = float(self.supply_pressure(t, x))
+            last["t"], last["p"] = t, p
+            T_sat = saturation_temperature(self.medium, p)
+            if T_sat is None:  # at or above the critical pressure: compare with T_c
+                T_sat = getattr(self.medium, "T_critical", None) or 0.0
+            return float(self.param_at("T", t)) - T_sat
+
+        def message(t):
+            p = last.get("p")
+            if p is None:
+                p = float(self.param_at("p", t)) if "p" in self.params else float("nan")
+            T = self.param_at("T", t)
+            T_sat = saturation_temperature(self.medium, p)
+            T_txt = f"{T_sat - 273.15:.2f}" if T_sat is not None else f"{T - 273.15:.2f}"
+            return (
+                f"boundary '{self.name}' ({type(self).__name__}): at t = {t:.6g} s the given "
+                f"supply temperature reaches T = {T_txt} °C, the saturation temperature at "
+                f"{p / 1e5:.6g} bar; (p, T) does not fix the supply state there (h jumps by the "
+                "latent heat between saturated liquid and vapour); give h or quality x for a "
+                "saturated supply"
+            )
+
+        return Switch(
+            "saturation",
+            g,
+            direction=0,
+            terminal=True,
+            message=message,
+            doc="T(t) - T_sat(p) [K]: the given supply T reaches saturation",
+        )
 
     def initial_guess(self, t0, x):
         x["M_passed"] = 0.0
@@ -263,3 +375,20 @@ class MassFlowBoundary(_Boundary):
         super().initial_guess(t0, x)
         if self.has_supply and self.params["h"] is None and x["m"] > 0:
             x["port.h"] = x["h_supply"]
+
+
+def saturation_temperature(medium, p):
+    """T_sat(p) [K] of a condensable medium: the temperature of saturated liquid,
+    T(p, h_liq(p)); None at or above the critical pressure or for a medium without
+    a two-phase region."""
+    f = getattr(medium, "saturation_enthalpies", None)
+    if f is None or not is_condensable(medium):
+        return None
+    try:
+        hl, _ = f(np.atleast_1d(float(p)))
+        hl = float(np.asarray(hl).reshape(-1)[0])
+        if not np.isfinite(hl):
+            return None
+        return float(medium.state(float(p), hl).T)
+    except PropertyError:
+        return None
