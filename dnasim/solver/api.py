@@ -152,7 +152,7 @@ def solve_dae(
         grid = _Grid(interval=float(dt), t0=t0, t_end=t_end)
     out = _Output(grid, callback, dense_output, t0, keep=keep_output)
     switches = [SwitchFunction.wrap(g, i) for i, g in enumerate(events)]
-    kinks = [sw for sw in switches if sw.restarts]
+    kinks = [sw for sw in switches if sw.kink and sw.restarts]
     if kinks and jac is None:
         # finite differences stay on the side of every restart switch (linear_algebra)
         def side(t, y, yp):

@@ -299,7 +299,10 @@ class NordsieckBDF:
         kept, algebraic y and y' solved, with y' weighted by the step size now
         wanted) removes r; integration restarts at order 1 with that step size.
         """
-        y, yp = self.reinitialize(self.t, self.y, self.yp, h)
+        try:
+            y, yp = self.reinitialize(self.t, self.y, self.yp, h)
+        except DAEError:
+            return  # not better than the accepted point: go on with the step cuts
         self.restart(self.t, y, yp, h)
         self.first_step = False  # no fast growth: h was cut for a reason
         self.jacobian_current = False
