@@ -252,8 +252,22 @@ def test_phase_switches_are_declared_per_volume_when_asked():
         assert g[2 * i] < 0 < g[2 * i + 1]
         assert abs(g[2 * i] - (h - h_liq)) < 1e-6 * h_liq
         assert abs(g[2 * i + 1] - (h_vap - h)) < 1e-6 * h_vap
-    # off by default: no switch without phase_switches
-    assert Pipe("p", V=1.0).switches() == []
+
+    # on by default for a condensable medium; off when asked
+    def evap_events(**kw):
+        p = Plant("boil", medium="Water")
+        p.add(PressureBoundary("src", p=60e5, T=500.0))
+        p.add(Pipe("evap", V=0.1, k=1e4, T_wall=510.0, kA=1e4, n_volumes=3, **kw))
+        p.add(Valve("v", C=1e-2, opening=1.0))
+        p.add(PressureBoundary("sink", p=50e5))
+        for a, b in [("src.port", "a"), ("evap.inlet", "a"), ("evap.outlet", "b")]:
+            p.connect(a, b)
+        for a, b in [("v.inlet", "b"), ("v.outlet", "c"), ("sink.port", "c")]:
+            p.connect(a, b)
+        return [e for e in p.assemble().events if e.component == "evap"]
+
+    assert [e.size for e in evap_events()] == [6]
+    assert evap_events(phase_switches=False) == []
 
 
 # ---------------------------------------------------------------- balances

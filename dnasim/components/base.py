@@ -264,7 +264,9 @@ class Switch:
     entry. restart: restart at order 1 at the located crossing although there is
     no action (a kink of the residual, e.g. a property crossing a phase line).
     terminal: stop the run at the crossing; ``message(t)`` then gives the plain
-    reason (used by ``dnasim.results``).
+    reason (used by ``dnasim.results``). kink: g marks a kink of the residual (a
+    phase line); the solver then takes finite differences on the side of the point
+    and cuts a failed step at the predicted crossing (``dnasim.solver``).
     """
 
     name: str
@@ -277,6 +279,7 @@ class Switch:
     terminal: bool = False
     names: list | None = None
     message: Callable | None = None
+    kink: bool = False
 
 
 @dataclass(frozen=True)

@@ -266,6 +266,7 @@ class Channel:
                 size=2 * n,
                 restart=True,
                 names=names,
+                kink=True,
                 doc="crossing of the saturated-liquid / saturated-vapour line, per volume",
             )
         ]

@@ -98,7 +98,7 @@ class Pipe(Component):
         Param(
             "phase_switches",
             "1",
-            False,
+            True,
             "locate crossings of the saturation lines per volume (condensable media)",
             kind="bool",
         ),

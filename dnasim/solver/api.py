@@ -152,6 +152,13 @@ def solve_dae(
         grid = _Grid(interval=float(dt), t0=t0, t_end=t_end)
     out = _Output(grid, callback, dense_output, t0, keep=keep_output)
     switches = [SwitchFunction.wrap(g, i) for i, g in enumerate(events)]
+    kinks = [sw for sw in switches if sw.kink and sw.restarts]
+    if kinks and jac is None:
+        # finite differences stay on the side of every restart switch (linear_algebra)
+        def side(t, y, yp):
+            return np.concatenate([sw.value(t, y, yp) for sw in kinks])
+
+        matrix.side = side
     event_log: list[dict] = []
     t_events: list[list] = [[] for _ in switches]
     y_events: list[list] = [[] for _ in switches]
@@ -190,7 +197,7 @@ def solve_dae(
         span = t_end - t0
         ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
 
-        def consistent(t, y, yp, what):
+        def consistent(t, y, yp, what, h_scale=None):
             yp = np.array(yp, dtype=float)
             yp[algebraic_mask] = 0.0  # not determined by F; the predictor starts them flat
             return solve_consistent(
@@ -201,7 +208,7 @@ def solve_dae(
                 algebraic_mask,
                 rtol=rtol,
                 atol=problem.atol,
-                h_scale=ic_scale,
+                h_scale=ic_scale if h_scale is None else h_scale,
                 matrix=matrix,
                 variable_names=variable_names,
                 equation_names=equation_names,
@@ -229,6 +236,13 @@ def solve_dae(
         )
         out.initial(t0, y, yp)
         g_old = [sw.value(t0, y, yp) for sw in switches]
+        solver.reinitialize = lambda t, y, yp, h: consistent(
+            t, y, yp, "the values at a step that failed repeatedly", h_scale=h
+        )
+        if kinks:
+            solver.predicted_crossing = lambda t_a, t_b: _predicted_crossing(
+                solver, kinks, t_a, t_b
+            )
         while solver.t < t_end:
             if stats.steps >= max_steps:
                 raise DAEError(
@@ -367,6 +381,36 @@ def _crossings(solver, switches, g_old, g_new, t_prev) -> list[_Crossing]:
         if c.restarts:
             break
     return result
+
+
+def _predicted_crossing(solver, kinks, t_a, t_b):
+    """Earliest crossing of a restart switch on the predictor polynomial in (t_a, t_b].
+
+    The predictor is the last accepted step's Nordsieck polynomial extrapolated
+    (``solver.interpolate`` beyond solver.t); t_a is the solver's time. Returns the
+    located time, or None when no restart switch changes sign on the prediction.
+    """
+    best = None
+    for sw in kinks:
+        g_a = sw.value(t_a, solver.y, solver.yp)
+        y_b, yp_b = solver.interpolate(t_b)
+        try:
+            g_b = sw.value(t_b, y_b, yp_b)
+        except DAEError:  # the prediction is outside the switch's domain
+            continue
+        if not sw.crossed(g_a, g_b).any():
+            continue
+
+        def values(t, sw=sw):
+            y, yp = solver.interpolate(t)
+            return sw.value(t, y, yp)
+
+        try:
+            t_c = locate_earliest(values, sw, t_a, g_a, t_b, g_b)[0]
+        except DAEError:
+            continue
+        best = t_c if best is None else min(best, t_c)
+    return best
 
 
 def _run_action(sw, c: _Crossing, n: int):

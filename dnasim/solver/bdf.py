@@ -40,6 +40,9 @@ MAX_NEWTON_FAILURES = 10
 MAX_ERROR_FAILURES = 10
 ETA_MAX_FIRST = 1.0e4 / 10.0  # growth allowed right after the (tiny) initial step
 ERROR_TARGET = 0.03  # the step-size formula aims at 0.03 of the tolerance (IDA: 0.5), see README
+REINIT_AFTER_FAILURES = 3  # failed attempts in one step before the point is made consistent
+REINIT_STEP_RATIO = 0.01  # ... when h has also fallen below 0.01 of the last step's
+CROSSING_OVERSHOOT = 1.1  # a failed step crossing a switch ends 10 % past the crossing
 ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
 
 
@@ -54,6 +57,7 @@ class SolverStats:
     jac_evals: int = 0
     lu_decomps: int = 0
     newton_iters: int = 0
+    reinitializations: int = 0
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -162,6 +166,11 @@ class NordsieckBDF:
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
         self.jacobian_current = False
         self.failure = StepFailure()
+        # predicted_crossing(t_a, t_b) -> the earliest crossing time of a restart switch
+        # on the predictor polynomial in (t_a, t_b], or None (set by the driver)
+        self.predicted_crossing = None
+        # reinitialize(t, y, yp, h) -> consistent (y, yp) at t (set by the driver)
+        self.reinitialize = None
         self.restart(t0, y0, yp0, h0)
 
     # -- starting and restarting -----------------------------------------------------------
@@ -221,9 +230,19 @@ class NordsieckBDF:
         error_weights = weights * self.error_mask
         n_newton_fail = 0
         n_error_fail = 0
+        reinitialized = False
         failed_this_step = False
         while True:
             q, h = self.q, self.h
+            if (
+                not reinitialized
+                and self.reinitialize is not None
+                and n_newton_fail + n_error_fail >= REINIT_AFTER_FAILURES
+                and h < REINIT_STEP_RATIO * self.h_used
+            ):
+                reinitialized = True
+                self._reinitialize(h)
+                q, h = self.q, self.h
             if t_stop is not None and self.t + h >= t_stop - 4 * EPS * abs(t_stop):
                 new_h = t_stop - self.t
                 nd.rescale(self.z, q, new_h / h)
@@ -245,7 +264,7 @@ class NordsieckBDF:
                 if self.fixed_step:
                     raise DAEError(self._failure_message(t_new, h, "Newton failed (fixed step)"))
                 self.steps_at_this_order = 0
-                self._change_step(0.25)
+                self._change_step(self._eta_after_newton_failure(t_new, h))
                 continue
             error = nd.error_coefficient(q) * self.norm(delta, error_weights)
             if error > 1.0 and not self.fixed_step:
@@ -264,6 +283,55 @@ class NordsieckBDF:
             self.h_used, self.q_used = h, q
             self._choose_next(error, delta, error_weights, failed_this_step)
             return
+
+    def _reinitialize(self, h: float) -> None:
+        """Make the last accepted point consistent again and restart there at order 1.
+
+        The corrector accepts y_n when the Newton update is below NEWTON_TOL of the
+        error tolerance; an algebraic constraint may be left with a residual r of
+        that size. At the step sizes of the accepted steps it is harmless, but once
+        failures have cut h far below them (a step into a phase line), the predictor
+        inherits r and the corrector must remove it within the new step: a kick of
+        r / h in the derivatives that no step size passes. boiling_60bar: a density
+        residual of 8e-10 kg (4e-10 of the volume's mass) in the last liquid volume
+        became a jump of 0.002 kg/s in the flow into it at h = 1e-9 s, and the error
+        test failed down to h = 1e-11 s. Solving F = 0 afresh at t_n (differential y
+        kept, algebraic y and y' solved, with y' weighted by the step size now
+        wanted) removes r; integration restarts at order 1 with that step size.
+        """
+        try:
+            y, yp = self.reinitialize(self.t, self.y, self.yp, h)
+        except DAEError:
+            return  # not better than the accepted point: go on with the step cuts
+        self.restart(self.t, y, yp, h)
+        self.first_step = False  # no fast growth: h was cut for a reason
+        self.jacobian_current = False
+        self.matrix.matrix = None
+        self.stats.reinitializations += 1
+
+    def _eta_after_newton_failure(self, t_new: float, h: float) -> float:
+        """Step ratio after a Newton failure: 0.25, or less to end just past a switch.
+
+        A phase line is a kink of the residual: the Newton of a step whose predictor
+        carries a volume across it starts on one piece and must converge on the
+        other, and the step size was cut by 4 again and again while the crossing
+        stayed inside the step. When the predictor polynomial (the last accepted
+        step's interpolant, extrapolated) crosses a restart switch in the step, the
+        step is shortened to end a little (CROSSING_OVERSHOOT) past the earliest
+        predicted crossing: only that crossing is left in the step, the predictor at
+        its end lies on the new side with the solution, and the finite-difference
+        matrix is built there. The driver then locates the crossing on the accepted
+        step and restarts at order 1 (seed sec. 10.2.1).
+        """
+        eta = 0.25
+        if self.predicted_crossing is None or self.fixed_step:
+            return eta
+        t_c = self.predicted_crossing(self.t, t_new)
+        if t_c is not None:
+            eta_c = CROSSING_OVERSHOOT * (t_c - self.t) / h
+            if 0.0 < eta_c < 0.9:
+                eta = min(max(eta_c, 1e-3), 0.9)
+        return eta
 
     def _check_step_size(self, h, t_new) -> None:
         if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not np.isfinite(h):
@@ -303,7 +371,7 @@ class NordsieckBDF:
                 )
                 if refresh:
                     self._new_matrix(t, y, yp, f, cj, h, weights)
-                converged, y, yp = self._newton(t, y, yp, f, cj, weights)
+                converged, y, yp = self._newton(t, y, yp, f, cj, weights, fresh=refresh)
             except ResidualDomainError as exc:
                 self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
                 converged = False
@@ -333,7 +401,7 @@ class NordsieckBDF:
         self.jacobian_current = True
         self.newton_ss = 20.0
 
-    def _newton(self, t, y, yp, f, cj, weights):
+    def _newton(self, t, y, yp, f, cj, weights, fresh=False):
         """Iterate y <- y - J^{-1} F with the DASSL/IDA rate test; returns (converged, y, yp)."""
         ratio = cj / self.matrix.cj
         scale = 2.0 / (1.0 + ratio) if ratio != 1.0 else 1.0
@@ -363,12 +431,15 @@ class NordsieckBDF:
                     self.failure = StepFailure(f"Newton converged too slowly (rate {rate:.2f})")
                     return False, y, yp
                 self.newton_ss = rate / (1.0 - rate)
-            # With a matrix kept from earlier steps, the rate estimate is stale: never
-            # accept after the first iteration. On DAEs whose constraints amplify errors
-            # (a transistor amplifier: gain ~100 from one node to the next) a stale rate
-            # accepted leftovers far above the tolerance, and the next step could not
-            # pass the error test at any h.
-            if self.newton_ss * dnorm <= NEWTON_TOL and (m > 0 or self.jacobian_current):
+            # With a matrix not built for this corrector (kept from earlier steps, or from
+            # an attempt at another h), the rate estimate is stale: never accept after the
+            # first iteration. On DAEs whose constraints amplify errors (a transistor
+            # amplifier: gain ~100 from one node to the next) a stale rate accepted
+            # leftovers far above the tolerance, and the next step could not pass the
+            # error test at any h. Near a phase line the matrix of a failed attempt may
+            # even belong to the other side of the kink (boiling_60bar: a leftover of
+            # 0.9 Pa between two liquid volumes, 0.007 kg/s in their flow, accepted).
+            if self.newton_ss * dnorm <= NEWTON_TOL and (m > 0 or fresh):
                 return True, y, yp
             if m + 1 < NEWTON_MAX_ITERS:
                 f = self.residual(t, y, yp)

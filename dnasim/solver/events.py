@@ -40,6 +40,11 @@ class SwitchFunction:
     ``action(t, y, yp, which)`` with ``which`` the int array of the elements that
     crossed at the located time.
 
+    ``kink = True`` (with ``restart``): g marks a kink of the residual (a phase
+    line). The solver then takes its finite differences on the side of g where the
+    point lies and cuts a step that failed in Newton at the crossing predicted on
+    the last step's polynomial (``linear_algebra``, ``bdf``).
+
     A switch *restarts* (cut the step at the crossing, make consistent, restart
     at order 1) when it is terminal, has an action, or has ``restart = True``;
     otherwise it only observes (its crossings are located and logged).
@@ -55,6 +60,7 @@ class SwitchFunction:
     vector: bool = False
     names: list = field(default_factory=list)
     restart_only: bool = False
+    kink: bool = False
 
     @classmethod
     def wrap(cls, g, index) -> SwitchFunction:
@@ -107,6 +113,7 @@ class SwitchFunction:
             vector,
             names,
             bool(getattr(g, "restart", False)),
+            bool(getattr(g, "kink", False)),
         )
 
     @property
