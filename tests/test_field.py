@@ -11,9 +11,22 @@ them alone, ``-m "not field_slow"`` skips them; CI runs everything.
 import pytest
 from field_checks import CASES, evaluate, run_plant
 
+#: plants that do not yet run to the end (issue 7 stays open for them). strict: the
+#: day one of them passes, the suite says so and the mark must go. At the stop the
+#: last volume creeps up to the saturated-liquid line (within 5e-4 to 0.03 J/kg) and
+#: every step that reaches past it fails; see the closing note of issue 7.
+NOT_YET = {
+    "boiling_60bar": "stops at ~38.4 s inside the moving boiling front (Newton fails at h = 2.5e-8 s)",
+    "boiling_10bar": "stops at ~19.6 s at the saturated-liquid line (step size at round-off)",
+    "boiling_190bar": "stops at ~34.9 s at the saturated-liquid line (Newton too slow)",
+    "condensing_pipe": "stops at ~55.2 s at the saturated-liquid line (step size at round-off)",
+}
+
 
 def _param(case):
     marks = [pytest.mark.field_slow] if case.slow else []
+    if case.name in NOT_YET:
+        marks.append(pytest.mark.xfail(reason=NOT_YET[case.name], strict=True))
     return pytest.param(case, id=case.name, marks=marks)
 
 

@@ -264,7 +264,7 @@ def test_phase_switches_are_declared_per_volume_when_asked():
             p.connect(a, b)
         for a, b in [("v.inlet", "b"), ("v.outlet", "c"), ("sink.port", "c")]:
             p.connect(a, b)
-        return [e for e in p.assemble().events if e.component == "evap"]
+        return [e for e in p.compile().events if e.component == "evap"]
 
     assert [e.size for e in evap_events()] == [6]
     assert evap_events(phase_switches=False) == []
