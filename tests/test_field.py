@@ -16,7 +16,7 @@ from field_checks import CASES, evaluate, run_plant
 #: last volume creeps up to the saturated-liquid line (within 5e-4 to 0.03 J/kg) and
 #: every step that reaches past it fails; see the closing note of issue 7.
 NOT_YET = {
-    "boiling_60bar": "stops at ~38.4 s inside the moving boiling front (Newton fails at h = 2.5e-8 s)",
+    "boiling_60bar": "stops at ~38.4 s in the moving boiling front (Newton fails at h = 2.5e-8 s)",
     "boiling_10bar": "stops at ~19.6 s at the saturated-liquid line (step size at round-off)",
     "boiling_190bar": "stops at ~34.9 s at the saturated-liquid line (Newton too slow)",
     "condensing_pipe": "stops at ~55.2 s at the saturated-liquid line (step size at round-off)",
