@@ -587,12 +587,6 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file, units):
         click.echo(f"wrote {f}")
 
 
-def _default_vars(names):
-    from dnasim.runner import default_plot_variables
-
-    return default_plot_variables(names)
-
-
 # --------------------------------------------------------------------------- linearize
 
 

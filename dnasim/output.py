@@ -46,7 +46,6 @@ __all__ = [
     "write_events_csv",
     "write_steps_csv",
     "select_variables",
-    "plot_variables",
     "plot_steps",
     "EVENT_COLUMNS",
     "STEP_COLUMNS",
@@ -532,61 +531,6 @@ def _pyplot():
     import matplotlib.pyplot as plt
 
     return plt
-
-
-def _group_by_unit(names: Sequence[str], units: dict[str, str]) -> list[tuple[str, list[str]]]:
-    groups: dict[str, list[str]] = {}
-    for n in names:
-        groups.setdefault(units.get(n, ""), []).append(n)
-    return list(groups.items())
-
-
-def plot_variables(
-    t,
-    data: dict,
-    names: Sequence[str],
-    units: dict[str, str],
-    path: str | os.PathLike,
-    *,
-    title: str | None = None,
-    event_times: Sequence[float] = (),
-    max_lines_per_axis: int = 12,
-) -> Path:
-    """Variables over time, one panel per unit (the seed's Figs. 10.2, 10.5, 10.6)."""
-    plt = _pyplot()
-    groups = _group_by_unit(names, units)
-    # keep panels readable: split big groups
-    panels: list[tuple[str, list[str]]] = []
-    for unit, group in groups:
-        for i in range(0, len(group), max_lines_per_axis):
-            panels.append((unit, group[i : i + max_lines_per_axis]))
-    if not panels:
-        panels = [("", [])]
-    t_scale, t_label = _time_axis(t)
-    fig, axes = plt.subplots(
-        len(panels), 1, sharex=True, figsize=(9, 2.6 * len(panels) + 1.0), squeeze=False
-    )
-    for ax, (unit, group) in zip(axes[:, 0], panels, strict=True):
-        for n in group:
-            ax.plot(t / t_scale, data[n], label=n, lw=1.2)
-        for te in event_times:
-            ax.axvline(te / t_scale, color="0.5", ls=":", lw=0.8)
-        ax.set_ylabel(f"[{unit or '-'}]")
-        ax.grid(True, alpha=0.3)
-        if group:
-            ax.legend(fontsize=8, loc="best")
-    axes[-1, 0].set_xlabel(t_label)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    path = Path(path)
-    try:
-        _atomic_write(
-            path, lambda f: fig.savefig(f, dpi=110, format=path.suffix.lstrip(".") or "png")
-        )
-    finally:
-        plt.close(fig)
-    return path
 
 
 def plot_steps(

@@ -39,7 +39,6 @@ __all__ = [
     "write_plots",
     "describe_report",
     "format_component",
-    "default_plot_variables",
     "plant_output_layout",
 ]
 
@@ -413,16 +412,6 @@ def run_plant(
 
 
 # --------------------------------------------------------------------------- plots
-
-
-def default_plot_variables(names, limit: int = 12) -> list[str]:
-    """Without --vars: outlet temperatures, sensor readings and controller outputs,
-    then node temperatures; the first few variables when there are none of these."""
-    leaf = {n: n.rsplit(".", 1)[-1] for n in names}
-    first = [n for n in names if leaf[n] in ("T_out", "T_s", "z")]
-    then = [n for n in names if leaf[n] == "T" and n not in first]
-    chosen = (first + then)[:limit]
-    return chosen or list(names)[: min(limit, 8)]
 
 
 def write_plots(outcome: RunOutcome, out_dir, patterns, units: str = "si") -> list[Path]:

@@ -16,7 +16,6 @@ from dnasim.output import (
     event_rows,
     parse_column_header,
     plot_steps,
-    plot_variables,
     read_results_csv,
     select_variables,
     write_events_csv,
@@ -172,8 +171,10 @@ def test_select_variables():
 
 def test_plots_are_pngs(tmp_path):
     t = np.linspace(0, 600, 50)
-    data = {"a.T [K]": 0, "a.T": 300 + t / 10, "b.m": np.sin(t)}
-    p1 = plot_variables(t, data, ["a.T", "b.m"], {"a.T": "K", "b.m": "kg/s"}, tmp_path / "v.png")
+    from dnasim.plots import plot_quantities
+
+    data = {"a.T": 300 + t / 10, "b.m": np.sin(t)}
+    p1 = plot_quantities(t, data, ["a.T", "b.m"], {"a.T": "K", "b.m": "kg/s"}, tmp_path / "v.png")
     p2 = plot_steps(
         np.array([[1, 1, 1], [3, 2, 2], [7, 4, 3]]), tmp_path / "s.png", event_times=[2]
     )
