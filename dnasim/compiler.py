@@ -143,7 +143,28 @@ def check(plant):
         return report, None
     analyse_system(plant, system, report)
     report.errors.extend(errors)
+    if not report.errors:
+        report.errors.extend(_state_problems(plant))
     return report, system
+
+
+def _state_problems(plant, t0: float = 0.0) -> list[str]:
+    """States the components prescribe (a boundary's supply at (p, T)), evaluated at
+    t0 and at every breakpoint of their time functions: a pressure above the fluid's
+    range, 5000 degC, a (p, T) supply at its saturation temperature. The messages
+    name the component and the state (``BoundaryStateError``); found here, ``dnasim
+    check`` reports them before any numerics."""
+    from dnasim.errors import ResidualDomainError
+
+    problems = []
+    for comp in plant.components.values():
+        for t in sorted({t0, *comp.breakpoints()}):
+            try:
+                comp.guess_nodes(t)
+            except (ResidualDomainError, PlantError, ValueError) as err:
+                problems.append(str(err))
+                break
+    return problems
 
 
 def compile(plant):  # noqa: A001 - the name of the stage

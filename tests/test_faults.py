@@ -453,3 +453,28 @@ def test_coolprop_tables_go_to_the_cache_directory(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "note:" in proc.stderr and str(cache.resolve()) in proc.stderr
     assert any(p.name.endswith(".bin.z") for p in cache.rglob("*"))
+
+
+# --------------------------------------------------------------------------- 7. states
+
+
+@pytest.mark.parametrize(
+    "old, new, words",
+    [
+        ('p = "120 bar"', "p = 1e30", ["boundary 'steam'", "above the IF97 limit"]),
+        ('"500 degC"', '"1000000 degC"', ["boundary 'steam'", "IF97"]),
+    ],
+)
+def test_check_evaluates_the_prescribed_states(tmp_path, old, new, words):
+    """`dnasim check` evaluates every boundary's supply state at t0 and at the
+    breakpoints of its time functions: out-of-range states are input errors naming
+    the boundary, before any numerics (they used to pass check and fail the run)."""
+    text = (PLANTS / "attemperator.toml").read_text()
+    assert old in text
+    path = tmp_path / "p.toml"
+    path.write_text(text.replace(old, new, 1))
+    result = invoke("check", path)
+    assert result.exit_code == 2, result.output
+    assert "internal error" not in result.output and "Traceback" not in result.output
+    for w in words:
+        assert w in result.output, (w, result.output)
