@@ -165,7 +165,8 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False):
     discontinuity (two points at the same t); without it, every accepted step and,
     after a restart, the state right after it.
     """
-    from dnasim.backends import NordsieckBDF, Problem
+    from dnasim.backends import NordsieckBDF
+    from dnasim.simulation import problem_for
     from dnasim.start import initial_values
 
     t0, t_end = sim.t_start, sim.t_end
@@ -193,18 +194,13 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False):
     if not dense_output:
         # rows go to the callback only: nothing grows with the rows
         solver.keep_output = False
-    problem = Problem(
-        residual=system.residual,
-        t_span=(t0, t_end),
-        y0=y0,
-        yp0=yp0,
-        algebraic=system.algebraic,
-        jac_sparsity=system.jac_sparsity,
-        events=system.events,
-        tstops=system.tstops(t0, t_end),
-        atol=system.atol_vector(sim.atol_scaled, y0, yp0, t_end - t0),
-        variable_names=list(system.names),
-        equation_names=list(system.eq_names),
+    problem = problem_for(
+        system,
+        t0,
+        t_end,
+        y0,
+        yp0,
+        sim.atol_scaled,
         output_interval=sim.output_interval,
         callback=callback,
     )

@@ -117,18 +117,13 @@ def simulate(
         if callback is not None:
             callback(t, y, yp)
 
-    pb = Problem(
-        residual=system.residual,
-        t_span=(float(t0), float(t_end)),
-        y0=y0,
-        yp0=yp0,
-        algebraic=system.algebraic,
-        jac_sparsity=system.jac_sparsity,
-        events=system.events,
-        tstops=system.tstops(t0, t_end),
-        atol=system.atol_vector(solver.atol_scaled, y0, yp0, t_end - t0),
-        variable_names=list(system.names),
-        equation_names=list(system.eq_names),
+    pb = problem_for(
+        system,
+        t0,
+        t_end,
+        y0,
+        yp0,
+        solver.atol_scaled,
         t_eval=t_eval,
         callback=point if (sinks or callback is not None) else None,
         reinitialise=partial(reinitialise, system),
@@ -146,6 +141,27 @@ def simulate(
         err.result = res
         raise err
     return res
+
+
+def problem_for(system, t0, t_end, y0, yp0, atol_scaled, **options) -> Problem:
+    """The ``Problem`` a solver backend integrates for ``system`` from consistent
+    (y0, yp0) at t0 to t_end [s]: residual, sparsity, switches, tstops, names and
+    atol_i = atol_scaled * scale_i (``System.atol_vector``); ``options`` are the
+    output settings (t_eval, output_interval, callback, reinitialise)."""
+    return Problem(
+        residual=system.residual,
+        t_span=(float(t0), float(t_end)),
+        y0=y0,
+        yp0=yp0,
+        algebraic=system.algebraic,
+        jac_sparsity=system.jac_sparsity,
+        events=system.events,
+        tstops=system.tstops(t0, t_end),
+        atol=system.atol_vector(atol_scaled, y0, yp0, t_end - t0),
+        variable_names=list(system.names),
+        equation_names=list(system.eq_names),
+        **options,
+    )
 
 
 def results_from(system, raw, solver_name="", wall_time=None, init_time=None) -> Results:
