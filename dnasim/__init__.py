@@ -6,6 +6,7 @@ The stages, each one object with one job (docs/architecture.md)::
     system = compile(plant)                                # the DAE over plant-wide arrays
     res = simulate(system, t_end=100.0, solver=NordsieckBDF(), sinks=[CSVSink("r.csv")])
     res["pipe.T_out"], res.to_dataframe(), res.to_xarray()
+    sw = sweep(spec, {"valve.C": [0.01, 0.02]}, executor=pool)   # many runs
 """
 
 from dnasim.errors import DAEError, DnasimError, PlantError, ResidualDomainError
@@ -31,6 +32,7 @@ __all__ = [
     "load_plant",
     "simulate",
     "solve_dae",
+    "sweep",
 ]
 
 # Imported lazily, so `dnasim --help` starts fast: the solver pulls in scipy, the
@@ -51,6 +53,7 @@ _LAZY = {
     "IDA": "dnasim.simulation",
     "CSVSink": "dnasim.simulation",
     "Results": "dnasim.results",
+    "sweep": "dnasim.sweeps",
 }
 
 

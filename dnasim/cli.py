@@ -1,4 +1,4 @@
-"""The ``dnasim`` command: run, check, components, plot.
+"""The ``dnasim`` command: run, sweep, check, components, plot, linearize.
 
 Exit codes: 0 success; 1 the simulation failed or was interrupted (results up to
 that time are on disk); 2 bad input (plant file, options, paths).
@@ -585,6 +585,154 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file, units):
         raise InputError(f"option --output: cannot write {out_file}: {exc}") from None
     for f in files:
         click.echo(f"wrote {f}")
+
+
+# --------------------------------------------------------------------------- sweep
+
+
+@main.command(name="sweep", context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+@click.option(
+    "-o",
+    "--output",
+    "out_dir",
+    required=True,
+    metavar="DIR",
+    help="Sweep directory: sweep.nc, summary.csv and one folder per case. A sweep "
+    "started again into DIR skips the cases already done there.",
+)
+@click.option(
+    "--set",
+    "set_options",
+    multiple=True,
+    metavar="COMP.PARAM=V1,V2,...",
+    help='Values of one parameter, with units, e.g. --set steam.T="500 degC,520 degC" or '
+    "--set simulation.t_end=60,120; repeat the option: the cases are the Cartesian product.",
+)
+@click.option(
+    "--cases",
+    "cases_file",
+    default=None,
+    metavar="FILE",
+    type=click.Path(dir_okay=False),
+    help="Cases from a CSV (header COMP.PARAM or 'COMP.PARAM [unit]', one row per case) "
+    "or TOML file ([[case]] tables).",
+)
+@click.option(
+    "-j",
+    "--jobs",
+    type=click.IntRange(1, 1024),
+    default=None,
+    help="Local worker processes [default: the number of CPUs].",
+)
+@click.option(
+    "--scheduler",
+    default=None,
+    metavar="ADDRESS",
+    help="Run on an existing Dask distributed cluster, e.g. tcp://127.0.0.1:8786.",
+)
+@click.option(
+    "--output-interval",
+    default=None,
+    metavar="DT",
+    help='Time between rows of each case and of the time grid of sweep.nc, e.g. "1 s" '
+    "[default: the plant file's, else 501 points].",
+)
+@_COOLPROP_CACHE_OPTION
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
+def sweep_cmd(
+    plant_file, out_dir, set_options, cases_file, jobs, scheduler, output_interval, coolprop_cache,
+    quiet
+):
+    """Run PLANT.toml for many parameter sets: the Cartesian product of --set values,
+    or the rows of --cases FILE. Writes DIR/sweep.nc (xarray, every output over case
+    and time), DIR/summary.csv (one row per case) and DIR/case_NNNN/ (results.csv,
+    events.csv, steps.csv, done.json). A failed case is recorded and the others go on;
+    exit code 1 when any case failed."""
+    from dnasim.cases import CaseError, check_cases, parse_set_option, product_cases, read_cases
+
+    _coolprop_cache(coolprop_cache)
+    loaded = _load(plant_file)
+    if bool(set_options) == bool(cases_file):
+        raise InputError("give the cases with --set COMP.PARAM=V1,V2,... or with --cases FILE")
+    try:
+        if cases_file:
+            cases = read_cases(cases_file)
+        else:
+            values = {}
+            for opt in set_options:
+                key, vals = parse_set_option(opt)
+                if key in values:
+                    raise CaseError(f"{key}: given twice; list all values in one --set")
+                values[key] = vals
+            cases = product_cases(values)
+        check_cases(loaded.spec, cases)
+    except CaseError as exc:
+        where = f"option --cases {cases_file}" if cases_file else "option --set"
+        raise InputError(f"{where}: {exc}") from None
+    if not cases:
+        raise InputError(f"{cases_file}: no cases")
+    dt = _parse_option_quantity(output_interval, "s", "--output-interval")
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create the output directory {out}: {exc.strerror or exc}") from None
+    from dnasim.sweeps import sweep
+
+    progress = not quiet and sys.stdout.isatty()
+    client = None
+    try:
+        if scheduler:
+            try:
+                from dask.distributed import Client
+            except ImportError:
+                raise InputError(
+                    "option --scheduler needs dask.distributed: pip install 'dask[distributed]'"
+                ) from None
+            try:
+                client = Client(scheduler, timeout=10)
+            except (OSError, TimeoutError) as exc:
+                raise InputError(
+                    f"option --scheduler: cannot connect to {scheduler}: {exc}"
+                ) from None
+            executor = client.get_executor()
+        else:
+            n = jobs or os.cpu_count() or 1
+            executor = None if n == 1 else _process_pool(min(n, len(cases)))
+        try:
+            result = sweep(loaded.spec, cases, executor, out_dir=out, output_interval=dt,
+                           progress=progress)
+        finally:
+            if executor is not None and client is None:
+                executor.shutdown(cancel_futures=True)
+    except KeyboardInterrupt:
+        raise SimulationFailed(
+            f"sweep interrupted; the cases finished so far are in {out} (start the same "
+            "command again to run the others)"
+        ) from None
+    finally:
+        if client is not None:
+            client.close()
+    if not quiet:
+        click.echo(
+            f"{len(cases)} cases: ran {result.ran}, skipped {result.skipped} (done before), "
+            f"failed {result.failed}\nresults in {out} (sweep.nc, summary.csv, case_NNNN/)"
+        )
+    if result.failed:
+        bad = result.summary[result.summary["status"] != "finished"]
+        lines = [f"case {r.case}: {r.status}: {r.message}" for r in bad.itertuples()]
+        raise SimulationFailed(
+            f"{result.failed} of {len(cases)} cases failed:\n" + "\n".join(lines[:20])
+        )
+
+
+def _process_pool(n: int):
+    """``n`` local worker processes (spawned: no threads of this process are copied)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"))
 
 
 # --------------------------------------------------------------------------- linearize
