@@ -641,8 +641,15 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file, units):
 @_COOLPROP_CACHE_OPTION
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
 def sweep_cmd(
-    plant_file, out_dir, set_options, cases_file, jobs, scheduler, output_interval, coolprop_cache,
-    quiet
+    plant_file,
+    out_dir,
+    set_options,
+    cases_file,
+    jobs,
+    scheduler,
+    output_interval,
+    coolprop_cache,
+    quiet,
 ):
     """Run PLANT.toml for many parameter sets: the Cartesian product of --set values,
     or the rows of --cases FILE. Writes DIR/sweep.nc (xarray, every output over case
@@ -677,7 +684,9 @@ def sweep_cmd(
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise InputError(f"cannot create the output directory {out}: {exc.strerror or exc}") from None
+        raise InputError(
+            f"cannot create the output directory {out}: {exc.strerror or exc}"
+        ) from None
     from dnasim.sweeps import sweep
 
     progress = not quiet and sys.stdout.isatty()
@@ -701,8 +710,9 @@ def sweep_cmd(
             n = jobs or os.cpu_count() or 1
             executor = None if n == 1 else _process_pool(min(n, len(cases)))
         try:
-            result = sweep(loaded.spec, cases, executor, out_dir=out, output_interval=dt,
-                           progress=progress)
+            result = sweep(
+                loaded.spec, cases, executor, out_dir=out, output_interval=dt, progress=progress
+            )
         finally:
             if executor is not None and client is None:
                 executor.shutdown(cancel_futures=True)

@@ -19,8 +19,9 @@ How it works:
   events.csv, steps.csv) with the status and counters; workers need no shared disk.
 * this process writes each case's files into ``DIR/case_NNNN/`` and then, atomically,
   ``done.json`` (the case, status, message, counters): the done marker. A sweep
-  started again into the same DIR skips every case whose marker holds the same
-  values, and runs the others.
+  started again into the same DIR skips every case whose folder (the same position
+  in the list of cases) has a marker with the same values, and runs the others
+  (and those that ended "interrupted" or with an internal "error").
 * a case that fails (the solver stops, or a value is refused: out of range, a plant
   that cannot be built) is recorded with status "failed" or "input-error" and its
   message; the other cases go on.
@@ -127,6 +128,8 @@ def run_case(spec, case: dict, index: int = 0) -> dict:
         else:
             rec["status"] = outcome.status
             rec["message"] = outcome.message if outcome.success else outcome.failure_message()
+            # the worker's temporary directory means nothing to the reader
+            rec["message"] = rec["message"].replace(str(Path(tmp) / "results.csv"), "results.csv")
             rec["t_reached"] = outcome.t_reached
             rec["steps"], rec["events"] = outcome.n_steps, outcome.n_events
             rec["stats"] = {
@@ -151,6 +154,10 @@ def _canonical(case: dict) -> Any:
     return json.loads(json.dumps(case, sort_keys=True, default=str))
 
 
+#: statuses of a case that a restarted sweep runs again (the others are final)
+RUN_AGAIN = ("interrupted", "error")
+
+
 def _done_record(out_dir, index: int, case: dict) -> dict | None:
     """The done marker of case ``index`` if it holds the same case values, else None."""
     try:
@@ -158,6 +165,11 @@ def _done_record(out_dir, index: int, case: dict) -> dict | None:
     except (OSError, ValueError):
         return None
     return rec if rec.get("case") == _canonical(case) else None
+
+
+def _is_done(out_dir, index: int, case: dict) -> bool:
+    rec = _done_record(out_dir, index, case)
+    return rec is not None and rec.get("status") not in RUN_AGAIN
 
 
 def _write_case(out_dir, rec: dict) -> None:
@@ -229,7 +241,7 @@ def sweep(
         spec.simulation.output_interval = float(output_interval)
     out = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="dnasim-sweep-"))
     out.mkdir(parents=True, exist_ok=True)
-    todo = [i for i, c in enumerate(cases) if _done_record(out, i, c) is None]
+    todo = [i for i, c in enumerate(cases) if not _is_done(out, i, c)]
     if progress is None:
         progress = sys.stdout.isatty()
     bar = _bar(len(todo)) if progress and todo else None
@@ -381,10 +393,11 @@ def collect(spec, cases, out_dir, *, output_interval=None):
         if all(isinstance(v, float) for v in vals):
             coords[k] = xr.Variable(("case",), np.array(vals), attrs={"units": punits[k] or "1"})
         else:
-            coords[k] = xr.Variable(("case",), np.array(["" if v is None else str(v) for v in vals]))
+            coords[k] = xr.Variable(
+                ("case",), np.array(["" if v is None else str(v) for v in vals])
+            )
     data_vars = {
-        n: xr.Variable(("case", "time"), arrays[n], attrs={"units": units[n] or "1"})
-        for n in names
+        n: xr.Variable(("case", "time"), arrays[n], attrs={"units": units[n] or "1"}) for n in names
     }
     data_vars["status"] = xr.Variable(("case",), np.array([str(r.get("status")) for r in records]))
     data_vars["message"] = xr.Variable(
@@ -412,4 +425,3 @@ def collect(spec, cases, out_dir, *, output_interval=None):
     ds.to_netcdf(tmp, engine="h5netcdf")
     os.replace(tmp, out / "sweep.nc")
     return summary, ds
-
