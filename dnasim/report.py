@@ -227,9 +227,12 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
         ("wall time [s]", f"{outcome.wall_time:.3f}"),
     ]
     if sim is not None:
-        for k in ("rtol", "atol", "max_order", "output_interval", "start"):
+        for k in ("rtol", "atol_scaled", "max_order", "output_interval", "start"):
             if hasattr(sim, k):
-                run_rows.append((k, _fmt(getattr(sim, k))))
+                v = getattr(sim, k)
+                if k == "output_interval":
+                    k, v = "output_interval [s]", "every accepted step" if v is None else v
+                run_rows.append((k, _fmt(v)))
     parts.append(_table(("run", "value"), run_rows, num_cols=(1,)))
     parts.append(
         _table(
@@ -289,7 +292,13 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
     first = True
     plots_html = []
     for fig in figs:
-        plots_html.append(fig.to_html(full_html=False, include_plotlyjs=True if first else False))
+        plots_html.append(
+            fig.to_html(
+                full_html=False,
+                include_plotlyjs=True if first else False,  # embedded once, never a CDN
+                config={"displaylogo": False, "responsive": True},
+            )
+        )
         first = False
     step_html = plots_html.pop() if (out / "steps.csv").exists() and plots_html else None
     parts.extend(plots_html)
@@ -310,7 +319,7 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
         )
         parts.append(
             _table(
-                header,
+                [{"time": "time [s]"}.get(h, h) for h in header],
                 [[_fmt(float(v)) if j in (2, 3) else v for j, v in enumerate(r)] for r in rows],
                 num_cols=(0, 1, 2, 3),
             )

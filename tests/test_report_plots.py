@@ -149,3 +149,41 @@ def test_flat_curves_do_not_magnify_round_off():
     # at least 1e-3 of the magnitude: 0.63 K around 633 K
     assert hi - lo == pytest.approx(0.63315) and lo < 633.15 < hi
     assert y_limits([np.linspace(400.0, 500.0, 5)]) is None
+
+
+CHROMIUM = next(
+    (p for p in ("/usr/bin/chromium", "/usr/bin/chromium-browser") if Path(p).exists()), None
+)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (headless)")
+def test_report_draws_its_curves_in_headless_chromium(run_dir):
+    """The page as a browser shows it: plotly, embedded, draws a line for every curve
+    of every figure (the DOM after the scripts ran), with no network access needed."""
+    import json
+    import shutil
+    import subprocess
+
+    text = (run_dir / "report.html").read_text()
+    # the figures' own trace lists: the number of curves plotly has to draw
+    decoder = json.JSONDecoder()
+    n_curves = 0
+    for m in re.finditer(r'Plotly\.newPlot\(\s*"[^"]+",\s*', text):
+        traces, _ = decoder.raw_decode(text, m.end())
+        n_curves += len(traces)
+    n_figures = text.count('class="plotly-graph-div"')
+    assert n_figures >= 4 and n_curves >= n_figures
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--dump-dom"]
+    if shutil.which("unshare") and subprocess.run(["unshare", "-n", "true"]).returncode == 0:
+        cmd = ["unshare", "-n", *cmd]  # no network at all: the page must not need it
+    dom = subprocess.run(
+        [*cmd, (run_dir / "report.html").as_uri()],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    ).stdout
+    assert dom.count('class="main-svg"') >= n_figures  # every figure drawn
+    # one group per curve, each with a drawn line (the legend's samples are js-lines too)
+    traces = dom.split('<g class="trace scatter')[1:]  # each up to the next curve
+    assert len(traces) == n_curves
+    assert all(re.search(r'class="js-line"[^>]*\sd="M-?[0-9.]+,-?[0-9.]+[LHV]', g) for g in traces)
