@@ -390,10 +390,14 @@ def collect(spec, cases, out_dir, *, output_interval=None):
     }
     for k in keys:
         vals = [_si_value(c[k], punits[k]) if k in c else None for c in cases]
+        # a parameter that is also an output (pi.setpoint): the coordinate says so
+        cname = f"{k} (parameter)" if k in units else k
         if all(isinstance(v, float) for v in vals):
-            coords[k] = xr.Variable(("case",), np.array(vals), attrs={"units": punits[k] or "1"})
+            coords[cname] = xr.Variable(
+                ("case",), np.array(vals), attrs={"units": punits[k] or "1"}
+            )
         else:
-            coords[k] = xr.Variable(
+            coords[cname] = xr.Variable(
                 ("case",), np.array(["" if v is None else str(v) for v in vals])
             )
     data_vars = {
