@@ -657,6 +657,7 @@ def sweep_cmd(
     events.csv, steps.csv, done.json). A failed case is recorded and the others go on;
     exit code 1 when any case failed."""
     from dnasim.cases import CaseError, check_cases, parse_set_option, product_cases, read_cases
+    from dnasim.errors import OutputError
 
     _coolprop_cache(coolprop_cache)
     loaded = _load(plant_file)
@@ -716,11 +717,17 @@ def sweep_cmd(
         finally:
             if executor is not None and client is None:
                 executor.shutdown(cancel_futures=True)
+    except click.ClickException:
+        raise
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
     except KeyboardInterrupt:
         raise SimulationFailed(
             f"sweep interrupted; the cases finished so far are in {out} (start the same "
             "command again to run the others)"
         ) from None
+    except Exception as exc:
+        raise _internal(exc, EXIT_SIMULATION) from None
     finally:
         if client is not None:
             client.close()

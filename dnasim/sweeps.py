@@ -252,10 +252,22 @@ def sweep(
                 if bar is not None:
                     bar.update(1)
         else:
-            futures = [executor.submit(run_case, spec, cases[i], i) for i in todo]
+            futures = {executor.submit(run_case, spec, cases[i], i): i for i in todo}
             try:
                 for fut in cf.as_completed(futures):
-                    _write_case(out, fut.result())
+                    i = futures[fut]
+                    try:
+                        rec = fut.result()
+                    except Exception as exc:  # the worker died (BrokenProcessPool, KilledWorker)
+                        rec = {
+                            "index": i,
+                            "case": cases[i],
+                            "status": "error",
+                            "message": f"the worker running this case failed: "
+                            f"{type(exc).__name__}: {exc}",
+                            "files": {},
+                        }
+                    _write_case(out, rec)
                     if bar is not None:
                         bar.update(1)
             except BaseException:

@@ -221,3 +221,25 @@ def test_cli_sweep_cases_file_two_processes(tmp_path):
     # the final reading against the closed form (rtol 1e-6 of ~420 K: 1e-3 K is loose)
     for tau, t_end, final in zip([4, 8], [20, 30], back["sensor.T_s final [K]"], strict=True):
         assert final == pytest.approx(T1 - (T1 - T0) * math.exp(-(t_end - T_STEP) / tau), abs=1e-3)
+
+
+def test_a_worker_that_dies_fails_its_case_only_and_runs_again(spec, tmp_path, monkeypatch):
+    from concurrent.futures import ThreadPoolExecutor
+
+    real = sweeps.run_case
+
+    def dying(spec, case, index=0):
+        if index == 1:
+            raise MemoryError("worker killed")  # as a lost worker's future raises
+        return real(spec, case, index)
+
+    monkeypatch.setattr(sweeps, "run_case", dying)
+    cases = [{"sensor.tau": "4 s"}, {"sensor.tau": "6 s"}]
+    with ThreadPoolExecutor(2) as pool:
+        sw = sweeps.sweep(spec, cases, pool, out_dir=tmp_path, progress=False)
+    assert list(sw.summary["status"]) == ["finished", "error"]
+    assert "MemoryError: worker killed" in sw.summary["message"][1]
+    monkeypatch.setattr(sweeps, "run_case", real)
+    sw = sweeps.sweep(spec, cases, out_dir=tmp_path, progress=False)
+    assert (sw.ran, sw.skipped) == (1, 1)  # the case of the dead worker runs again
+    assert list(sw.summary["status"]) == ["finished", "finished"]
