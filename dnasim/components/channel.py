@@ -71,7 +71,7 @@ from dnasim.components.physics import (
     friction_dp,
     lmtd,
     saturation_enthalpies,
-    upwind_mean,
+    upwind_mean_weighted,
     upwind_weight,
 )
 
@@ -210,11 +210,14 @@ class Channel:
         Q = x[self.Q]
         dM = xp[self.M]
         dU = xp[self.U]
-        E = self.face_energy(m, h)
+        # the upwind weights of every face, once: wp = w(m[j]), wm = w(-m[j])
+        wp = upwind_weight(m, self.m_eps)
+        wm = upwind_weight(-m, self.m_eps)
+        E = wp * h[:-1] - wm * h[1:]  # face_energy
         mass = dM - (m[:-1] - m[1:])
         energy = dU - (E[:-1] - E[1:] - Q)
         density = M - self.V_i * rho[1:-1]
-        a, b = self.inflow_weights(m)
+        a, b = wp[:-1], wm[1:]  # inflow_weights
         if self.mean or self.heat_transfer != "outlet":
             c = blend_to_own(a, b, self.m_eps)
             s = a + b + c
@@ -233,7 +236,7 @@ class Channel:
             dT = 0.5 * (T_a + T_i) - T_wall
         heat = Q - self.kA_i * dT
         mf = m[:-1]
-        rho_f = upwind_mean(mf, rho[:-2], rho[1:-1], self.m_eps)
+        rho_f = upwind_mean_weighted(wp[:-1], wm[:-1], rho[:-2], rho[1:-1])
         momentum = p[:-2] - p[1:-1] - self.friction(mf, rho_f) - rho_f * G * self.dz_i
         outlet_pressure = np.array([p[-1] - p[-2]])
         return [mass, energy, density, internal, heat, momentum, outlet_pressure]
