@@ -248,13 +248,11 @@ class System:
             eqs = comp.equations()
             start = len(eq_names)
             for eq in eqs:
-                eq_names.append(f"{comp.name}.{eq.name}")
-                eq_owner.append(comp.name)
-                try:
-                    rows_y.append([gidx[_local(index, r, comp, eq)] for r in eq.y])
-                    rows_yp.append([gidx[_local(index, r, comp, eq)] for r in eq.yp])
-                except KeyError as err:  # pragma: no cover - _local raises PlantError
-                    raise PlantError(str(err)) from None
+                for row, ys, yps in eq.rows():  # a vector equation: one row per element
+                    eq_names.append(f"{comp.name}.{row}")
+                    eq_owner.append(comp.name)
+                    rows_y.append([gidx[_local(index, r, comp, row)] for r in ys])
+                    rows_yp.append([gidx[_local(index, r, comp, row)] for r in yps])
             self.blocks.append(
                 ComponentBlock(
                     comp,
@@ -480,17 +478,18 @@ class System:
         return np.concatenate(row)
 
 
-def _local(index, ref, comp, eq):
+def _local(index, ref, comp, row):
+    """Local position of ``ref`` in equation row ``row`` (its name) of ``comp``."""
     try:
         k = index[ref]
     except KeyError:
         raise PlantError(
-            f"component '{comp.name}' ({type(comp).__name__}): equation '{eq.name}' refers to "
+            f"component '{comp.name}' ({type(comp).__name__}): equation '{row}' refers to "
             f"'{ref}', which is not one of its variables or port values"
         ) from None
     if isinstance(k, slice):
         raise PlantError(
-            f"component '{comp.name}': equation '{eq.name}' refers to the whole vector '{ref}'; "
+            f"component '{comp.name}': equation '{row}' refers to the whole vector '{ref}'; "
             "name elements"
         )
     return k
