@@ -386,7 +386,11 @@ class System:
                         f"but declares {ne} equations"
                     )
             F[b.eq_slice] = r
-        F[self.node_eq_start : self.node_eq_start + self.n_nodes] = self.node_matrix @ y
+        # node mass balances, sum_k n_k (the rows of ``node_matrix``, without the
+        # sparse-product call overhead)
+        F[self.node_eq_start : self.node_eq_start + self.n_nodes] = np.bincount(
+            self._mix_node, weights=self._mix_sign * y[self._mix_flow], minlength=self.n_nodes
+        )
         F[self.node_eq_start + self.n_nodes :] = self.node_mixing(y)
         self._checked_lengths = True
         if not np.all(np.isfinite(F)):

@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dnasim.components.physics import M_EPS_REL
 from dnasim.errors import PlantError
 from dnasim.timefunctions import TimeFunction, as_time_function
 
@@ -500,8 +501,6 @@ class Component:
     def m_eps(self) -> float:
         """Flow scale of the smooth upwind weight at this component's ports [kg/s]:
         ``physics.M_EPS_REL`` times the parameter m_nominal (1 kg/s without one)."""
-        from dnasim.components.physics import M_EPS_REL
-
         m_nom = self.params.get("m_nominal") or 1.0
         return M_EPS_REL * float(m_nom)
 

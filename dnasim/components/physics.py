@@ -229,7 +229,13 @@ def blend_to_own(a, b, eps):
     exact upwind value when the inflow s >= eps, turns smoothly into the volume's
     own state as the inflow vanishes, and s + c >= 0.6 eps > 0."""
     s = np.asarray(a, dtype=float) + np.asarray(b, dtype=float)
-    return np.where(s < eps, (eps - s) ** 3 / eps**2, 0.0)
+    low = s < eps
+    if s.ndim == 0 or low.all():
+        return np.where(low, (eps - s) ** 3 / eps**2, 0.0)
+    c = np.zeros(s.shape)
+    if low.any():  # the power only where it is needed (a pipe in flow: nowhere)
+        c[low] = (eps - s[low]) ** 3 / eps**2
+    return c
 
 
 def energy_in(m, h_node, h_own, eps):
