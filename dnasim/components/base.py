@@ -12,8 +12,14 @@ A component declares, in plain Python:
 * variables (``Variable``): name, unit, nominal scale, optional vector size;
 * equations (``Equation``): each one names the local variables it touches and the
   local variables whose time derivatives it touches. The global sparsity pattern
-  of the DAE is built from these declarations alone;
-* ``residual(t, x, xp)``: the residuals, in the order of ``equations()``;
+  of the DAE is built from these declarations alone.
+  A vector equation (``Equation(..., size=n)``) declares n rows "name[0]" ...
+  "name[n-1]" at once, each with its own dependencies (``y=lambda i: ...``), and
+  one residual function returning the n values (a pipe's n mass balances);
+* ``residual(t, x, xp)``: the residuals, in the order of ``equations()`` (derived
+  from the equations' own residual functions unless overridden; ``prepare(t, x,
+  xp)`` computes once what several equations share, e.g. one property call for
+  all volumes, and hands it to them as ``x.work``);
 * switch functions (``Switch``) with their actions, for discrete state;
 * ``initial_guess``: values for its variables before initialisation.
 
