@@ -10,15 +10,20 @@ Plant: steam reservoir (50 bar, 500 C, stepping to 520 C at t = 1 s) -> Pipe
 constants). For each N the same assembled residual is integrated by dnasim's
 solve_dae and by SUNDIALS IDA (scikit-sundae; dense LU for N <= 30, otherwise
 sparse LU with the declared sparsity), both at rtol = 1e-6 and the same atol
-vector. Printed per N: unknowns, wall time per simulated second, steps,
-residual evaluations, the share of wall time spent inside property calls
-(medium.state, cache hits included) and the ratio of the wall times IDA/dnasim
-(> 1: dnasim faster).
+vector. Printed per N: unknowns, CPU time (``time.process_time``: the machine
+is shared, so wall time is noise) per simulated second, steps, residual
+evaluations, property calls (calls of ``medium.state`` and ``medium.states``,
+cache hits included) and the states the backend computed ("prop pts",
+``medium.n_evaluations``), the share of the run's wall time spent inside property calls,
+T_out at t_end, and the ratio of the CPU times IDA/dnasim (> 1: dnasim faster).
+``--json FILE`` also writes the rows (T_out to full precision) for comparing two
+versions.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
 
@@ -63,28 +68,38 @@ def steam_pipe(n):
 
 
 class PropertyTimer:
-    """Wraps medium.state on the shared Water instance and accumulates its wall time."""
+    """Wraps medium.state and medium.states on the shared Water instance; accumulates
+    their wall time (perf_counter: a CPU clock costs a system call per read, which
+    would inflate the 1e5 scalar calls of a run) and number of calls."""
 
     def __init__(self, medium):
         self.medium = medium
-        self.inner = type(medium).state.__get__(medium)
         self.seconds = 0.0
         self.calls = 0
 
-    def __enter__(self):
-        def timed(p, h):
+    def _wrap(self, name):
+        inner = getattr(type(self.medium), name).__get__(self.medium)
+
+        def timed(*args, **kwargs):
             t0 = time.perf_counter()
             try:
-                return self.inner(p, h)
+                return inner(*args, **kwargs)
             finally:
                 self.seconds += time.perf_counter() - t0
                 self.calls += 1
 
-        self.medium.state = timed
+        setattr(self.medium, name, timed)
+
+    def __enter__(self):
+        self.evaluations = self.medium.n_evaluations
+        self._wrap("state")
+        self._wrap("states")
         return self
 
     def __exit__(self, *exc):
         del self.medium.state
+        del self.medium.states
+        self.evaluations = self.medium.n_evaluations - self.evaluations
 
 
 def run(n, solver, rtol=1e-6, linsolver=None):
@@ -93,7 +108,8 @@ def run(n, solver, rtol=1e-6, linsolver=None):
     y0, yp0 = initial_values(dae, 0.0, "steady")
     water = get_medium("Water")
     with PropertyTimer(water) as timer:
-        t0 = time.perf_counter()
+        t0 = time.process_time()
+        w0 = time.perf_counter()
         if solver == "dnasim":
             from dnasim.solver import solve_dae
 
@@ -127,14 +143,17 @@ def run(n, solver, rtol=1e-6, linsolver=None):
                 tstops=dae.tstops(0.0, T_END),
                 linsolver=linsolver,
             )
-        wall = time.perf_counter() - t0
+        wall = time.process_time() - t0
+        w = time.perf_counter() - w0
     T_out = water.state(res.y[dae.index["out.p"], -1], res.y[dae.index["out.h"], -1]).T
     return {
         "n": dae.n,
         "wall": wall,
         "steps": res.stats["steps"],
         "fevals": res.stats["residual_evals"],
-        "prop_share": timer.seconds / wall,
+        "prop_share": timer.seconds / w,
+        "prop_calls": timer.calls,
+        "prop_points": timer.evaluations,
         "T_out": T_out,
         "ok": bool(res.success),
     }
@@ -144,28 +163,34 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 300, 1000])
     ap.add_argument("--no-ida", action="store_true", help="skip the IDA comparison")
+    ap.add_argument("--json", help="also write the rows to this JSON file")
     args = ap.parse_args(argv)
     header = (
-        f"{'N':>5} {'unknowns':>8} {'s/sim-s':>9} {'steps':>6} {'F evals':>8} {'prop %':>7} "
-        f"{'T_out K':>9} | {'IDA s/sim-s':>11} {'IDA steps':>9} {'IDA F':>7} {'IDA prop %':>10} "
+        f"{'N':>5} {'unknowns':>8} {'CPU s/sim-s':>11} {'steps':>6} {'F evals':>8} "
+        f"{'prop calls':>10} {'prop pts':>9} {'prop %':>7} {'T_out K':>11} | "
+        f"{'IDA CPU s/sim-s':>15} {'IDA steps':>9} {'IDA F':>7} {'IDA prop %':>10} "
         f"{'IDA/dnasim':>10}"
     )
     print(header)
     print("-" * len(header))
+    rows = []
     for n in args.sizes:
         ours = run(n, "dnasim")
+        row = {"N": n, "dnasim": ours}
+        rows.append(row)
         line = (
-            f"{n:>5} {ours['n']:>8} {ours['wall'] / T_END:>9.4f} {ours['steps']:>6} "
-            f"{ours['fevals']:>8} "
-            f"{100 * ours['prop_share']:>6.1f}% {ours['T_out']:>9.3f}"
+            f"{n:>5} {ours['n']:>8} {ours['wall'] / T_END:>11.4f} {ours['steps']:>6} "
+            f"{ours['fevals']:>8} {ours['prop_calls']:>10} {ours['prop_points']:>9} "
+            f"{100 * ours['prop_share']:>6.1f}% {ours['T_out']:>11.5f}"
         )
         if not ours["ok"]:
             line += " (dnasim FAILED)"
         if not args.no_ida:
             lin = "dense" if n <= 30 else "sparse"
             ida = run(n, "ida", linsolver=lin)
+            row["ida"] = ida
             line += (
-                f" | {ida['wall'] / T_END:>11.4f} {ida['steps']:>9} {ida['fevals']:>7} "
+                f" | {ida['wall'] / T_END:>15.4f} {ida['steps']:>9} {ida['fevals']:>7} "
                 f"{100 * ida['prop_share']:>9.1f}% {ida['wall'] / ours['wall']:>10.2f}"
             )
             if not ida["ok"]:
@@ -173,6 +198,9 @@ def main(argv=None):
             if abs(ida["T_out"] - ours["T_out"]) > 1e-2:
                 line += f" (T_out differs: IDA {ida['T_out']:.3f})"
         print(line, flush=True)
+        if args.json:
+            with open(args.json, "w") as f:
+                json.dump(rows, f, indent=1)
     return 0
 
 

@@ -26,10 +26,13 @@ below are shorthands for those functions and keep no state.
 
 from __future__ import annotations
 
-import networkx as nx
+from typing import TYPE_CHECKING
 
 from dnasim.components.base import Component
 from dnasim.errors import PlantError
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 __all__ = ["Plant"]
 
@@ -124,6 +127,8 @@ class Plant:
     @property
     def graph(self) -> nx.MultiGraph:
         """Components and nodes as vertices; fluid connections and signal links as edges."""
+        import networkx as nx  # 0.15 s to import: only when a graph is asked for
+
         g = nx.MultiGraph()
         for name, comp in self.components.items():
             g.add_node(("component", name), type=type(comp).__name__)

@@ -262,6 +262,23 @@ def _port_info(ports) -> list[dict]:
     return out
 
 
+def _declared_equations(cls, params) -> list[str]:
+    """The equations a component declares (``Component.equations()`` of an example
+    instance: required numbers set to 1), one line each, "name[i]" for a vector
+    equation: "name [unit]: doc". Empty when no example can be built."""
+    required = {p["name"]: 1.0 for p in params if p["required"] and p["kind"] == "number"}
+    try:
+        eqs = cls("example", **required).equations()
+    except Exception:
+        return []
+    out = []
+    for e in eqs:
+        name = e.name if getattr(e, "size", None) is None else f"{e.name}[i]"
+        unit = f" [{e.unit}]" if e.unit else ""
+        out.append(f"{name}{unit}: {e.doc}".rstrip(": ") if e.doc else f"{name}{unit}")
+    return out
+
+
 def component_info(cls) -> dict:
     """Ports, parameters (unit, default, range, doc) and equations of a component class.
 
@@ -288,6 +305,8 @@ def component_info(cls) -> dict:
         eqs = []
     elif isinstance(eqs, str):
         eqs = [e for e in eqs.strip().splitlines() if e.strip()]
+    if not eqs:
+        eqs = _declared_equations(cls, params)
     fports, sins = fluid_ports(cls), signal_inputs(cls)
     if not any(p["required"] for p in params):
         # ports may depend on parameters (a Mixer's inlets): list the defaults' ports

@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from dnasim.output import (
     StreamingCSV,
     clear_results,
@@ -293,7 +295,7 @@ def run_plant(
             # evaluated just before it, as the state y is
             t_row = math.nextafter(t, -math.inf) if not restart and t in time_events else t
             values = state["row"](t_row, y, yp)
-            w.write_row([t, *values, float(restart)])
+            w.write_row(np.concatenate(([t], values, [float(restart)])))
         except OutputError as exc:
             state["output_error"] = exc
             # a DAEError stops the solver, which then hands over its partial result

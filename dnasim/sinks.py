@@ -8,6 +8,8 @@ end, also after a failure.
 
 from __future__ import annotations
 
+import numpy as np
+
 __all__ = ["CSVSink"]
 
 
@@ -29,7 +31,7 @@ class CSVSink:
         )
 
     def write(self, t, row):
-        self._writer.write_row([t, *row])
+        self._writer.write_row(np.concatenate(([float(t)], np.asarray(row, dtype=float))))
 
     def close(self):
         if self._writer is not None:

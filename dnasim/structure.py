@@ -31,7 +31,6 @@ from __future__ import annotations
 from collections import defaultdict
 from dataclasses import dataclass, field
 
-import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import maximum_bipartite_matching
@@ -334,13 +333,31 @@ def _pressure_conflicts(plant):
 
 
 def _check_connectivity(plant, report):
-    g = plant.graph
-    parts = list(nx.connected_components(g))
-    if len(parts) > 1:
+    """Disconnected sub-networks of the graph of ``Plant.graph`` (components and
+    nodes as vertices, fluid connections and signal links as edges), found with
+    scipy's connected components (no networkx import on the run path)."""
+    from scipy.sparse.csgraph import connected_components
+
+    vertex = {("component", c): i for i, c in enumerate(plant.components)}
+    for node in plant.node_names():
+        vertex.setdefault(("node", node), len(vertex))
+    edges = [(("component", c), ("node", n)) for (c, _), n in plant.connections.items()]
+    edges += [(("component", s), ("component", d)) for (d, _), (s, _) in plant.links.items()]
+    for a, b in edges:
+        vertex.setdefault(a, len(vertex))
+        vertex.setdefault(b, len(vertex))
+    rows = [vertex[a] for a, _ in edges]
+    cols = [vertex[b] for _, b in edges]
+    nv = len(vertex)
+    g = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(nv, nv))
+    n_parts, labels = connected_components(g, directed=False)
+    if n_parts > 1:
         desc = []
-        for part in parts:
-            comps = sorted(n for kind, n in part if kind == "component")
+        for k in range(n_parts):  # part k holds the first vertex not in parts 0..k-1
+            comps = sorted(
+                n for (kind, n), i in vertex.items() if kind == "component" and labels[i] == k
+            )
             desc.append("{" + ", ".join(comps) + "}")
         report.warnings.append(
-            f"the plant has {len(parts)} disconnected sub-networks: " + " ".join(desc)
+            f"the plant has {n_parts} disconnected sub-networks: " + " ".join(desc)
         )

@@ -248,13 +248,11 @@ class System:
             eqs = comp.equations()
             start = len(eq_names)
             for eq in eqs:
-                eq_names.append(f"{comp.name}.{eq.name}")
-                eq_owner.append(comp.name)
-                try:
-                    rows_y.append([gidx[_local(index, r, comp, eq)] for r in eq.y])
-                    rows_yp.append([gidx[_local(index, r, comp, eq)] for r in eq.yp])
-                except KeyError as err:  # pragma: no cover - _local raises PlantError
-                    raise PlantError(str(err)) from None
+                for row, ys, yps in eq.rows():  # a vector equation: one row per element
+                    eq_names.append(f"{comp.name}.{row}")
+                    eq_owner.append(comp.name)
+                    rows_y.append([gidx[_local(index, r, comp, row)] for r in ys])
+                    rows_yp.append([gidx[_local(index, r, comp, row)] for r in yps])
             self.blocks.append(
                 ComponentBlock(
                     comp,
@@ -388,7 +386,11 @@ class System:
                         f"but declares {ne} equations"
                     )
             F[b.eq_slice] = r
-        F[self.node_eq_start : self.node_eq_start + self.n_nodes] = self.node_matrix @ y
+        # node mass balances, sum_k n_k (the rows of ``node_matrix``, without the
+        # sparse-product call overhead)
+        F[self.node_eq_start : self.node_eq_start + self.n_nodes] = np.bincount(
+            self._mix_node, weights=self._mix_sign * y[self._mix_flow], minlength=self.n_nodes
+        )
         F[self.node_eq_start + self.n_nodes :] = self.node_mixing(y)
         self._checked_lengths = True
         if not np.all(np.isfinite(F)):
@@ -459,38 +461,59 @@ class System:
         self.output_names()
         return dict(self._output_units)
 
+    def _node_groups(self):
+        groups = self.__dict__.get("_node_groups_cache")
+        if groups is None:
+            groups = _group_nodes(self.node_names, self.node_index, self.node_media)
+            self._node_groups_cache = groups
+        return groups
+
     def output_row(self, t, y, yp) -> np.ndarray:
         """One output row (order of ``output_names()``) from (t, y, y')."""
-        row = [np.asarray(y, dtype=float)]
-        node_T = []
-        for node in self.node_names:
-            k = self.node_index[node]
-            medium = self.node_media.get(node)
-            try:
-                node_T.append(
-                    medium.state(float(y[k]), float(y[k + 1])).T if medium is not None else np.nan
-                )
-            except ResidualDomainError:
-                node_T.append(np.nan)
-        row.append(np.array(node_T))
-        for b in self.blocks:
-            if b.comp.outputs():
-                vals = b.comp.output_values(t, b.local(y), b.local(yp))
-                row.append(np.asarray(vals, dtype=float))
+        y = np.asarray(y, dtype=float)
+        row = [y]
+        node_T = np.full(len(self.node_names), np.nan)
+        for medium, pos, kp in self._node_groups():
+            # one property call per medium for all its nodes; nan where out of range
+            r = medium.states(y[kp], y[kp + 1], check=False)
+            node_T[pos] = np.where(r.ok, r.T, np.nan)
+        row.append(node_T)
+        out_blocks = self.__dict__.get("_output_blocks")
+        if out_blocks is None:  # the blocks with derived outputs, found once
+            out_blocks = self._output_blocks = [b for b in self.blocks if b.comp.outputs()]
+        for b in out_blocks:
+            vals = b.comp.output_values(t, b.local(y), b.local(yp))
+            row.append(np.asarray(vals, dtype=float))
         return np.concatenate(row)
 
 
-def _local(index, ref, comp, eq):
+def _group_nodes(node_names, node_index, node_media):
+    """[(medium, positions in node_names, indices of the nodes' p in y)] per medium."""
+    groups = {}
+    for j, node in enumerate(node_names):
+        medium = node_media.get(node)
+        if medium is not None:
+            groups.setdefault(id(medium), (medium, [], []))
+            groups[id(medium)][1].append(j)
+            groups[id(medium)][2].append(node_index[node])
+    return [
+        (m, np.array(pos, dtype=np.intp), np.array(kp, dtype=np.intp))
+        for m, pos, kp in groups.values()
+    ]
+
+
+def _local(index, ref, comp, row):
+    """Local position of ``ref`` in equation row ``row`` (its name) of ``comp``."""
     try:
         k = index[ref]
     except KeyError:
         raise PlantError(
-            f"component '{comp.name}' ({type(comp).__name__}): equation '{eq.name}' refers to "
+            f"component '{comp.name}' ({type(comp).__name__}): equation '{row}' refers to "
             f"'{ref}', which is not one of its variables or port values"
         ) from None
     if isinstance(k, slice):
         raise PlantError(
-            f"component '{comp.name}': equation '{eq.name}' refers to the whole vector '{ref}'; "
+            f"component '{comp.name}': equation '{row}' refers to the whole vector '{ref}'; "
             "name elements"
         )
     return k

@@ -218,7 +218,10 @@ def test_pipe_unknowns_are_seven_per_volume_plus_one():
     for n in (1, 4):
         pipe = Pipe("p", V=1.0, k=1.0, C_wall=1.0, n_volumes=n)
         n_vars = sum(v.size or 1 for v in pipe.variables())
-        assert n_vars == len(pipe.equations()) == 7 * n + 1
+        n_rows = sum(e.n_rows for e in pipe.equations())  # a vector equation: n rows
+        assert n_vars == n_rows == 7 * n + 1
+        names = [row for e in pipe.equations() for row, _, _ in e.rows()]
+        assert names[:n] == [f"mass[{i}]" for i in range(n)] and names[-n:][0] == "wall[0]"
 
 
 # ---------------------------------------------------------------- phase switches

@@ -12,8 +12,14 @@ A component declares, in plain Python:
 * variables (``Variable``): name, unit, nominal scale, optional vector size;
 * equations (``Equation``): each one names the local variables it touches and the
   local variables whose time derivatives it touches. The global sparsity pattern
-  of the DAE is built from these declarations alone;
-* ``residual(t, x, xp)``: the residuals, in the order of ``equations()``;
+  of the DAE is built from these declarations alone.
+  A vector equation (``Equation(..., size=n)``) declares n rows "name[0]" ...
+  "name[n-1]" at once, each with its own dependencies (``y=lambda i: ...``), and
+  one residual function returning the n values (a pipe's n mass balances);
+* ``residual(t, x, xp)``: the residuals, in the order of ``equations()`` (derived
+  from the equations' own residual functions unless overridden; ``prepare(t, x,
+  xp)`` computes once what several equations share, e.g. one property call for
+  all volumes, and hands it to them as ``x.work``);
 * switch functions (``Switch``) with their actions, for discrete state;
 * ``initial_guess``: values for its variables before initialisation.
 
@@ -53,6 +59,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dnasim.components.physics import M_EPS_REL
 from dnasim.errors import PlantError
 from dnasim.timefunctions import TimeFunction, as_time_function
 
@@ -239,14 +246,42 @@ class Equation:
     residual: ``f(t, x, xp) -> float``. When every equation of a component has one,
     ``Component.residual`` is derived from the list (in its order), so the docs
     (``dnasim components``), the sparsity and the residual come from one place.
+
+    A vector equation (``size=n``, e.g. the mass balance of each of a pipe's n
+    volumes) stands for n scalar rows named "name[0]" ... "name[n-1]". Then ``y``
+    and ``yp`` are functions ``i -> tuple of local names`` giving row i's own
+    dependencies (a plain tuple means the same names in every row), and
+    ``residual(t, x, xp)`` returns an array of n values, row i at index i. A
+    scalar equation (``size=None``, the default) is exactly as described above.
     """
 
     name: str
-    y: tuple[str, ...] = ()
-    yp: tuple[str, ...] = ()
+    y: tuple[str, ...] | Callable = ()
+    yp: tuple[str, ...] | Callable = ()
     doc: str = ""
     unit: str = ""
     residual: Callable | None = field(default=None, compare=False, repr=False)
+    size: int | None = None
+
+    @property
+    def n_rows(self) -> int:
+        """Number of scalar residual rows: 1, or ``size`` for a vector equation."""
+        return 1 if self.size is None else int(self.size)
+
+    def rows(self) -> list[tuple[str, tuple[str, ...], tuple[str, ...]]]:
+        """The scalar rows as (name, y, yp): one for a scalar equation, ``size`` for a
+        vector equation ("name[i]" with the dependencies of row i)."""
+        if self.size is None:
+            return [(self.name, tuple(self.y), tuple(self.yp))]
+        y, yp = self.y, self.yp
+        return [
+            (
+                f"{self.name}[{i}]",
+                tuple(y(i)) if callable(y) else tuple(y),
+                tuple(yp(i)) if callable(yp) else tuple(yp),
+            )
+            for i in range(int(self.size))
+        ]
 
 
 @dataclass
@@ -300,12 +335,14 @@ class LocalVector:
     controller's "free"/"high"/"low"), read and written by the component.
     """
 
-    __slots__ = ("data", "index", "modes")
+    __slots__ = ("data", "index", "modes", "work")
 
     def __init__(self, data: np.ndarray, index: dict, modes: dict | None = None):
         self.data = data
         self.index = index
         self.modes = {} if modes is None else modes
+        #: what ``Component.prepare`` computed for this evaluation (None without it)
+        self.work = None
 
     def __getitem__(self, name):
         k = self.index[name]
@@ -470,8 +507,6 @@ class Component:
     def m_eps(self) -> float:
         """Flow scale of the smooth upwind weight at this component's ports [kg/s]:
         ``physics.M_EPS_REL`` times the parameter m_nominal (1 kg/s without one)."""
-        from dnasim.components.physics import M_EPS_REL
-
         m_nom = self.params.get("m_nominal") or 1.0
         return M_EPS_REL * float(m_nom)
 
@@ -522,7 +557,25 @@ class Component:
                     f"component '{self.name}' ({type(self).__name__}): equation(s) "
                     f"{', '.join(missing)} declare no residual function"
                 )
-        return np.array([e.residual(t, x, xp) for e in eqs], dtype=float)
+        x.work = self.prepare(t, x, xp)
+        if all(e.size is None for e in eqs):
+            return np.array([e.residual(t, x, xp) for e in eqs], dtype=float)
+        out = []
+        for e in eqs:
+            r = np.asarray(e.residual(t, x, xp), dtype=float).reshape(-1)
+            if r.size != e.n_rows:
+                raise PlantError(
+                    f"component '{self.name}' ({type(self).__name__}): equation '{e.name}' "
+                    f"returned {r.size} residuals but declares {e.n_rows}"
+                )
+            out.append(r)
+        return np.concatenate(out)
+
+    def prepare(self, t: float, x: LocalVector, xp: LocalVector):
+        """Hook: what several equations share, computed once per residual evaluation
+        (e.g. one property call for all volumes of a pipe). The base ``residual``
+        stores the result in ``x.work`` before calling the equations. Default: None."""
+        return None
 
     def switches(self) -> list[Switch]:
         return []

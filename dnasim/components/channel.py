@@ -71,7 +71,7 @@ from dnasim.components.physics import (
     friction_dp,
     lmtd,
     saturation_enthalpies,
-    upwind_mean,
+    upwind_mean_weighted,
     upwind_weight,
 )
 
@@ -153,32 +153,88 @@ class Channel:
         ]
 
     def equations(self):
+        """Six vector equations of n rows and one scalar equation, each with its
+        residual: the block of that name in ``x.work`` (``blocks``, computed once per
+        evaluation by the component's ``prepare``)."""
         n = self.n
-        m, M, U, Q = self.m, self.M, self.U, self.Q
-        eqs = {k: [] for k in ("mass", "energy", "density", "internal_energy", "heat", "momentum")}
-        P = self.prefix
-        for i in range(n):
-            pl, hl = self.state_names(i)
-            pi, hi = self.state_names(i + 1)
-            pr, hr = self.state_names(i + 2)
-            mi, mo = f"{m}[{i}]", f"{m}[{i + 1}]"
-            eqs["mass"].append(Equation(f"{P}mass[{i}]", y=(mi, mo), yp=(f"{M}[{i}]",)))
-            eqs["energy"].append(
-                Equation(f"{P}energy[{i}]", y=(mi, mo, hl, hi, hr, f"{Q}[{i}]"), yp=(f"{U}[{i}]",))
-            )
-            eqs["density"].append(Equation(f"{P}density[{i}]", y=(f"{M}[{i}]", pi, hi)))
-            inflow = (mi, mo, pl, hl, pr, hr)
-            ie = (f"{U}[{i}]", f"{M}[{i}]", pi, hi) + (inflow if self.mean else ())
-            eqs["internal_energy"].append(Equation(f"{P}internal_energy[{i}]", y=ie))
-            ht = (f"{Q}[{i}]", self.wall[i], pi, hi)
-            if self.heat_transfer != "outlet":
-                ht += inflow
-            eqs["heat"].append(Equation(f"{P}heat[{i}]", y=ht))
-            eqs["momentum"].append(Equation(f"{P}momentum[{i}]", y=(pl, hl, pi, hi, mi)))
-        out = [e for block in eqs.values() for e in block]
-        po, _ = self.state_names(n + 1)
-        out.append(Equation(f"{P}outlet_pressure", y=(po, f"{self.pv}[{n - 1}]")))
-        return out
+        m, M, U, Q, P = self.m, self.M, self.U, self.Q, self.prefix
+        S = self.state_names
+
+        def flows(i):
+            return (f"{m}[{i}]", f"{m}[{i + 1}]")
+
+        def inflow(i):  # what the inflow state x_a of volume i reads
+            return flows(i) + S(i) + S(i + 2)
+
+        def none(i):
+            return ()
+
+        ie_inflow = inflow if self.mean else none
+        ht_inflow = none if self.heat_transfer == "outlet" else inflow
+
+        def block(key):
+            name = P + key
+            return lambda t, x, xp: x.work[name]
+
+        return [
+            Equation(
+                P + "mass",
+                size=n,
+                y=flows,
+                yp=lambda i: (f"{M}[{i}]",),
+                doc="dM[i]/dt = m[i] - m[i+1]",
+                unit="kg/s",
+                residual=block("mass"),
+            ),
+            Equation(
+                P + "energy",
+                size=n,
+                y=lambda i: flows(i) + (S(i)[1], S(i + 1)[1], S(i + 2)[1], f"{Q}[{i}]"),
+                yp=lambda i: (f"{U}[{i}]",),
+                doc="dU[i]/dt = E[i] - E[i+1] - Q[i]",
+                unit="W",
+                residual=block("energy"),
+            ),
+            Equation(
+                P + "density",
+                size=n,
+                y=lambda i: (f"{M}[{i}]",) + S(i + 1),
+                doc="M[i] = V_i rho(p_v[i], h_v[i])",
+                unit="kg",
+                residual=block("density"),
+            ),
+            Equation(
+                P + "internal_energy",
+                size=n,
+                y=lambda i: (f"{U}[{i}]", f"{M}[{i}]") + S(i + 1) + ie_inflow(i),
+                doc="U[i] = M[i] (u_a + u_i)/2" if self.mean else "U[i] = M[i] u_i",
+                unit="J",
+                residual=block("internal_energy"),
+            ),
+            Equation(
+                P + "heat",
+                size=n,
+                y=lambda i: (f"{Q}[{i}]", self.wall[i]) + S(i + 1) + ht_inflow(i),
+                doc=f"Q[i] = kA_i dT ({self.heat_transfer})",
+                unit="W",
+                residual=block("heat"),
+            ),
+            Equation(
+                P + "momentum",
+                size=n,
+                y=lambda i: S(i) + S(i + 1) + (f"{m}[{i}]",),
+                doc="p(S_i) - p_v[i] = dp_f(m[i], rho_f) + rho_f g dz_i",
+                unit="Pa",
+                residual=block("momentum"),
+            ),
+            Equation(
+                P + "outlet_pressure",
+                y=(S(n + 1)[0], f"{self.pv}[{n - 1}]"),
+                doc="p(S_{n+1}) = p_v[n-1]",
+                unit="Pa",
+                residual=block("outlet_pressure"),
+            ),
+        ]
 
     def evaluate(self, medium, x):
         """Property arrays (p, h, T, rho, u) of the n + 2 states S_0..S_{n+1}."""
@@ -201,8 +257,9 @@ class Channel:
             return friction_dp(self.k_i, m, rho, self.m_reg)
         return self.c_i * m * np.sqrt(m * m + self.m_reg * self.m_reg)
 
-    def residual_blocks(self, x, xp, props, T_wall):
-        """Residuals in the order of ``equations()`` (six blocks of n, then one)."""
+    def blocks(self, x, xp, props, T_wall):
+        """The residual of each equation of ``equations()`` by its name (prefix
+        included): six arrays of n, and "outlet_pressure" an array of one."""
         p, h, T, rho, u = props
         m = x[self.m]
         M = x[self.M]
@@ -210,11 +267,14 @@ class Channel:
         Q = x[self.Q]
         dM = xp[self.M]
         dU = xp[self.U]
-        E = self.face_energy(m, h)
+        # the upwind weights of every face, once: wp = w(m[j]), wm = w(-m[j])
+        wp = upwind_weight(m, self.m_eps)
+        wm = upwind_weight(-m, self.m_eps)
+        E = wp * h[:-1] - wm * h[1:]  # face_energy
         mass = dM - (m[:-1] - m[1:])
         energy = dU - (E[:-1] - E[1:] - Q)
         density = M - self.V_i * rho[1:-1]
-        a, b = self.inflow_weights(m)
+        a, b = wp[:-1], wm[1:]  # inflow_weights
         if self.mean or self.heat_transfer != "outlet":
             c = blend_to_own(a, b, self.m_eps)
             s = a + b + c
@@ -233,10 +293,19 @@ class Channel:
             dT = 0.5 * (T_a + T_i) - T_wall
         heat = Q - self.kA_i * dT
         mf = m[:-1]
-        rho_f = upwind_mean(mf, rho[:-2], rho[1:-1], self.m_eps)
+        rho_f = upwind_mean_weighted(wp[:-1], wm[:-1], rho[:-2], rho[1:-1])
         momentum = p[:-2] - p[1:-1] - self.friction(mf, rho_f) - rho_f * G * self.dz_i
         outlet_pressure = np.array([p[-1] - p[-2]])
-        return [mass, energy, density, internal, heat, momentum, outlet_pressure]
+        P = self.prefix
+        return {
+            P + "mass": mass,
+            P + "energy": energy,
+            P + "density": density,
+            P + "internal_energy": internal,
+            P + "heat": heat,
+            P + "momentum": momentum,
+            P + "outlet_pressure": outlet_pressure,
+        }
 
     def switches(self, medium):
         """The phase switch of the n volumes (see the module doc): one vector Switch."""

@@ -202,22 +202,28 @@ class HeatExchanger(Component):
         return out + [Variable("T_w", "K", 300.0, self.n, "wall temperature of section i")]
 
     def equations(self):
-        n = self.n
+        n, C_i = self.n, self.params["C_wall"] / self.n
         eqs = self.channels["hot"].equations() + self.channels["cold"].equations()
-        for i in range(n):
-            eqs.append(
-                Equation(f"wall[{i}]", y=(f"hot_Q[{i}]", f"cold_Q[{n - 1 - i}]"), yp=(f"T_w[{i}]",))
+        eqs.append(
+            Equation(
+                "wall",
+                size=n,
+                y=lambda i: (f"hot_Q[{i}]", f"cold_Q[{n - 1 - i}]"),
+                yp=lambda i: (f"T_w[{i}]",),
+                doc=f"{C_i:g} dT_w[i]/dt = hot_Q[i] + cold_Q[n-1-i]",
+                unit="W",
+                residual=lambda t, x, xp: C_i * xp["T_w"] - (x["hot_Q"] + x["cold_Q"][::-1]),
             )
+        )
         return eqs
 
-    def residual(self, t, x, xp):
+    def prepare(self, t, x, xp):
+        """One property call per side, then both channels' blocks."""
         T_w = x["T_w"]
         hot, cold = self.channels["hot"], self.channels["cold"]
-        mh, mc = self.side_medium("hot"), self.side_medium("cold")
-        blocks = hot.residual_blocks(x, xp, hot.evaluate(mh, x), T_w)
-        blocks += cold.residual_blocks(x, xp, cold.evaluate(mc, x), T_w[::-1])
-        wall = self.params["C_wall"] / self.n * xp["T_w"] - (x["hot_Q"] + x["cold_Q"][::-1])
-        return np.concatenate(blocks + [wall])
+        work = hot.blocks(x, xp, hot.evaluate(self.side_medium("hot"), x), T_w)
+        work.update(cold.blocks(x, xp, cold.evaluate(self.side_medium("cold"), x), T_w[::-1]))
+        return work
 
     def outputs(self):
         return [

@@ -215,45 +215,60 @@ class Pipe(Component):
         return out
 
     def equations(self):
+        n, C_i = self.n, self.params["C_wall"] / self.n
         eqs = self.channel.equations()
-        C_i = self.params["C_wall"] / self.n
-        for i in range(self.n):
-            if self.fixed_wall:
-                eqs.append(Equation(f"wall[{i}]", y=(f"T_w[{i}]",), doc="T_w = T_wall(t)"))
-            elif self.no_wall:
-                pi, hi = self.channel.state_names(i + 1)
-                eqs.append(
-                    Equation(f"wall[{i}]", y=(f"T_w[{i}]", pi, hi), doc="T_w = T (adiabatic)")
-                )
-            else:
-                eqs.append(
-                    Equation(
-                        f"wall[{i}]", y=(f"Q[{i}]",), yp=(f"T_w[{i}]",), doc=f"{C_i:g} dT_w/dt = Q"
-                    )
-                )
         if self.fixed_wall:
             eqs.append(
                 Equation(
+                    "wall",
+                    size=n,
+                    y=lambda i: (f"T_w[{i}]",),
+                    doc="T_w[i] = T_wall(t)",
+                    unit="K",
+                    residual=lambda t, x, xp: x["T_w"] - self.param_at("T_wall", t),
+                )
+            )
+            eqs.append(
+                Equation(
                     "heat_passed",
-                    y=tuple(f"Q[{i}]" for i in range(self.n)),
+                    y=tuple(f"Q[{i}]" for i in range(n)),
                     yp=("Q_passed",),
                     doc="dQ_passed/dt = sum Q",
+                    unit="W",
+                    residual=lambda t, x, xp: xp["Q_passed"] - np.sum(x["Q"]),
+                )
+            )
+        elif self.no_wall:
+            eqs.append(
+                Equation(
+                    "wall",
+                    size=n,
+                    y=lambda i: (f"T_w[{i}]",) + self.channel.state_names(i + 1),
+                    doc="T_w[i] = T_i (adiabatic)",
+                    unit="K",
+                    residual=lambda t, x, xp: x["T_w"] - x.work["T"][1:-1],
+                )
+            )
+        else:
+            eqs.append(
+                Equation(
+                    "wall",
+                    size=n,
+                    y=lambda i: (f"Q[{i}]",),
+                    yp=lambda i: (f"T_w[{i}]",),
+                    doc=f"{C_i:g} dT_w[i]/dt = Q[i]",
+                    unit="W",
+                    residual=lambda t, x, xp: C_i * xp["T_w"] - x["Q"],
                 )
             )
         return eqs
 
-    def residual(self, t, x, xp):
+    def prepare(self, t, x, xp):
+        """One property call for the n + 2 states, then every channel block."""
         props = self.channel.evaluate(self.medium, x)
-        T_w = x["T_w"]
-        blocks = self.channel.residual_blocks(x, xp, props, T_w)
-        if self.fixed_wall:
-            blocks.append(T_w - self.param_at("T_wall", t))
-            blocks.append([xp["Q_passed"] - np.sum(x["Q"])])
-        elif self.no_wall:
-            blocks.append(T_w - props[2][1:-1])
-        else:
-            blocks.append(self.params["C_wall"] / self.n * xp["T_w"] - x["Q"])
-        return np.concatenate(blocks)
+        work = self.channel.blocks(x, xp, props, x["T_w"])
+        work["T"] = props[2]
+        return work
 
     def outputs(self):
         return [

@@ -19,7 +19,8 @@
 
 Every failure to evaluate a state is a :class:`PropertyError` (a
 :class:`dnasim.errors.ResidualDomainError`) that names the fluid, p, h and the
-property. CoolProp is imported only when a CoolProp medium is requested.
+property. CoolProp is imported only when a CoolProp medium is requested, numba
+(for IF97 water) only when water is.
 Modules: ``state`` (FluidState, FluidStates), ``errors`` (PropertyError),
 ``base`` (Medium and its cache), ``if97`` (water by IF97, on ``if97_kernel``,
 the vectorised IAPWS-IF97 kernel, with ``if97_coefficients``), ``coolprop_medium``
@@ -32,7 +33,6 @@ from dnasim.media.base import Medium
 from dnasim.media.errors import PropertyError
 from dnasim.media.gas_mixture import GasMixture
 from dnasim.media.ideal_gas import IdealGas
-from dnasim.media.if97 import IF97Water
 from dnasim.media.registry import BACKENDS, canonical_fluid_name, get_medium
 from dnasim.media.state import FluidState, FluidStates
 
@@ -43,6 +43,12 @@ def __getattr__(name: str):
         from dnasim.media.coolprop_medium import CoolPropMedium
 
         return CoolPropMedium
+    # IF97 water imports numba (0.3 s CPU, and 0.3 s to load its compiled kernels):
+    # only when water is asked for, so an air plant starts without it
+    if name == "IF97Water":
+        from dnasim.media.if97 import IF97Water
+
+        return IF97Water
     raise AttributeError(f"module 'dnasim.media' has no attribute {name!r}")
 
 
