@@ -5,9 +5,12 @@ Ordering (once per pattern):
 1. match equations to unknowns (Hopcroft-Karp,
    ``scipy.sparse.csgraph.maximum_bipartite_matching``): row r_j is the equation
    matched to unknown j, so B = A[r, :] has a structurally non-zero diagonal;
-2. reverse Cuthill-McKee on the symmetrised pattern B + B^T
-   (``scipy.sparse.csgraph.reverse_cuthill_mckee``) gives the permutation p, and
-   the reordered matrix is A' = A[r[p], :][:, p].
+2. reverse Cuthill-McKee (``scipy.sparse.csgraph.reverse_cuthill_mckee``) on the
+   symmetrised pattern B + B^T and on B^T B (unknowns that share an equation are
+   neighbours) gives two permutations p; the one with the narrower LAPACK band
+   (2 kl + ku + 1) is kept, and the reordered matrix is A' = A[r[p], :][:, p]. On
+   the steam pipe B^T B gives kl, ku = 11, 15 at 1000 volumes where B + B^T gives
+   19, 20.
 
 A' has kl sub- and ku super-diagonals. A chain of volumes (a pipe) gives a band
 whatever the order the components were declared in: 9 to 17 for the plants'
@@ -67,19 +70,23 @@ class BandOrdering:
         row_of_col = np.empty(n, dtype=np.intp)
         row_of_col[match] = np.arange(n)
         matched = csr[row_of_col, :]
-        sym = (matched + matched.T).tocsr()
-        p = np.asarray(reverse_cuthill_mckee(sym, symmetric_mode=True), dtype=np.intp)
-        rows = row_of_col[p]
-        cols = p
-        new_row = np.empty(n, dtype=np.intp)
-        new_row[rows] = np.arange(n)
-        new_col = np.empty(n, dtype=np.intp)
-        new_col[cols] = np.arange(n)
+        matched.data[:] = 1.0
         entry_cols = np.repeat(np.arange(n), np.diff(pattern.indptr))
-        i = new_row[pattern.indices]
-        j = new_col[entry_cols]
-        kl = int(max(np.max(i - j, initial=0), 0))
-        ku = int(max(np.max(j - i, initial=0), 0))
+        best = None
+        for graph in (matched + matched.T, matched.T @ matched):
+            p = np.asarray(reverse_cuthill_mckee(graph.tocsr(), symmetric_mode=True), np.intp)
+            rows = row_of_col[p]
+            new_row = np.empty(n, dtype=np.intp)
+            new_row[rows] = np.arange(n)
+            new_col = np.empty(n, dtype=np.intp)
+            new_col[p] = np.arange(n)
+            i = new_row[pattern.indices]
+            j = new_col[entry_cols]
+            kl = int(max(np.max(i - j, initial=0), 0))
+            ku = int(max(np.max(j - i, initial=0), 0))
+            if best is None or 2 * kl + ku < 2 * best[2] + best[3]:
+                best = (rows, p, kl, ku, i, j)
+        rows, cols, kl, ku, i, j = best
         ldab = 2 * kl + ku + 1
         flat = (kl + ku + i - j) + j * ldab
         return cls(rows, cols, kl, ku, flat, n, pattern.nnz)
