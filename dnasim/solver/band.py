@@ -13,18 +13,29 @@ Ordering (once per pattern):
    19, 20.
 
 A' has kl sub- and ku super-diagonals. A chain of volumes (a pipe) gives a band
-whatever the order the components were declared in: 9 to 17 for the plants'
-pipes. LAPACK's band LU with partial pivoting (dgbtrf) then costs about
+whatever the order the components were declared in (kl, ku = 11, 12 for the
+steam pipe at 100 volumes, 11, 15 at 1000). LAPACK's band LU with partial
+pivoting (dgbtrf) then costs about
 2 n kl (kl + ku) flops and a solve (dgbtrs) about 2 n (2 kl + ku), against
 SuperLU's symbolic work and its fill-in outside the band.
 
-Choice (``BandOrdering.worthwhile``): the band solver is used when the band with
-the room pivoting needs, n (2 kl + ku + 1) entries, holds at most BAND_FILL_MAX
-times the stored entries of the pattern, or the band is narrow
-(kl + ku <= BAND_NARROW); otherwise SuperLU. At n = 7015 (a 1000-volume pipe,
-kl + ku ~ 30) the band LU took 1.3 ms and a solve 0.1 ms against SuperLU's 6 ms
-and 2 ms; at small n (20 to 200 unknowns) a band of any width is the whole matrix,
-and LAPACK's call (4 us) beats SuperLU's (40 us).
+Choice (``BandOrdering.worthwhile``): the band solver is used when kl + ku <=
+BAND_NARROW (128), or else when the band with the room pivoting needs,
+n (2 kl + ku + 1) entries, holds at most BAND_FILL_MAX (12) times the stored
+entries of the pattern; SuperLU otherwise. Measured (CPU time, random values on
+the plants' patterns; LU, then one solve):
+
+    plant                    n   kl  ku   SuperLU           band (dgbtrf/dgbtrs)
+    air_pipe                22   10  10   0.034 / 0.005 ms  0.006 / 0.003 ms
+    attemperator            67   19  19   0.052 / 0.008 ms  0.018 / 0.005 ms
+    superheater_line       357   54  53   0.325 / 0.027 ms  0.326 / 0.020 ms
+    steam pipe N = 100     715   11  12   0.72 / 0.058 ms   0.16 / 0.033 ms
+    steam pipe N = 1000   7015   11  15   4.1 / 0.44 ms     1.2 / 0.25 ms
+
+The band LU costs about 2 n kl (kl + ku) flops, SuperLU about the same inside its
+fill plus its symbolic work; past kl + ku ~ 128 a band wide enough to hold a
+plant's long-range couplings holds mostly zeros, and SuperLU's fill-reducing
+ordering (COLAMD) wins.
 
 Solving A x = b: b' = b[r[p]], A' x' = b', x[p] = x'.
 """
@@ -36,7 +47,7 @@ import scipy.sparse
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 from scipy.sparse.csgraph import maximum_bipartite_matching, reverse_cuthill_mckee
 
-BAND_NARROW = 64  # kl + ku at or below this: always banded
+BAND_NARROW = 128  # kl + ku at or below this: always banded
 BAND_FILL_MAX = 12.0  # band storage / stored pattern entries at or below this: banded
 
 
