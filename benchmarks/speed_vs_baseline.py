@@ -34,7 +34,6 @@ the same problem.
 from __future__ import annotations
 
 import argparse
-import os
 import resource
 import subprocess
 import sys
@@ -160,7 +159,6 @@ def main(argv=None) -> int:
         "baseline": (str(base_exe), "--atol"),
         "now": (str(now_exe), "--atol-scaled"),
     }
-    env_note = os.environ.get("NUMBA_NUM_THREADS", "")
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         files = plant_files(tmp)
@@ -187,7 +185,7 @@ def main(argv=None) -> int:
         f"{'plant':<18} {'baseline CPU s':>14} {'now CPU s':>10} {'ratio':>7} "
         f"{'steps base':>10} {'steps now':>10}"
     )
-    print(f"# speed_vs_baseline: {COMMIT} against this checkout, best of {args.repeat}" + env_note)
+    print(f"# speed_vs_baseline: {COMMIT} against this checkout, best of {args.repeat}")
     print(head)
     print("-" * len(head))
     for name in names:

@@ -73,6 +73,7 @@ def solve_ida(
         y = np.empty(n)
         y[cols] = u
         return y
+
     events = list(events)
     # Scalar switches count 1, vector switches (attribute ``size``) their size.
     sizes = [int(g.size) if hasattr(g, "size") else 1 for g in events]
