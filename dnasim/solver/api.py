@@ -252,8 +252,11 @@ def solve_dae(
             next_stop = stops[0] if stops and stops[0] > solver.t else t_end
             t_prev = solver.t
             solver.step(next_stop, left_limit=next_stop < t_end)
-            g_new = [sw.value(solver.t, solver.y, solver.yp) for sw in switches]
-            cut = _crossings(solver, switches, g_old, g_new, t_prev)
+            if switches:
+                g_new = [sw.value(solver.t, solver.y, solver.yp) for sw in switches]
+                cut = _crossings(solver, switches, g_old, g_new, t_prev)
+            else:
+                g_new, cut = g_old, ()
             for c in cut:
                 sw = switches[c.switch]
                 for j in c.which:
@@ -294,7 +297,10 @@ def solve_dae(
                 y_new, yp_new = consistent(
                     t_star, y_new, yp_new, f"the values after the switch {sw.names[c.located]!r}"
                 )
-                solver.restart(t_star, y_new, yp_new)
+                next_stop = stops[0] if stops and stops[0] > t_star else t_end
+                solver.restart(
+                    t_star, y_new, yp_new, solver.restart_step(t_star, y_new, yp_new, next_stop)
+                )
                 out.restart(t_star, y_new, yp_new)
                 g_old = [sw.value(t_star, y_new, yp_new) for sw in switches]
                 continue
@@ -305,7 +311,10 @@ def solve_dae(
                 y_new, yp_new = consistent(
                     solver.t, solver.y, solver.yp, "the values after the time event (tstop)"
                 )
-                solver.restart(solver.t, y_new, yp_new)
+                next_stop = stops[0] if stops else t_end
+                solver.restart(
+                    solver.t, y_new, yp_new, solver.restart_step(solver.t, y_new, yp_new, next_stop)
+                )
                 out.restart(solver.t, y_new, yp_new)
                 g_old = [sw.value(solver.t, y_new, yp_new) for sw in switches]
     except DAEError as exc:

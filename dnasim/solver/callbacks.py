@@ -25,6 +25,11 @@ def call_user(fn, what: str, t: float, *args):
     except (ResidualDomainError, DAEError):
         raise
     except Exception as exc:
-        raise UserCallbackError(
-            f"{what[0].upper()}{what[1:]} raised {type(exc).__name__} at t = {float(t):.10g}: {exc}"
-        ) from exc
+        raise user_error(what, t, exc) from exc
+
+
+def user_error(what: str, t: float, exc: Exception) -> UserCallbackError:
+    """The UserCallbackError for ``exc`` raised by the callback ``what`` at time t."""
+    return UserCallbackError(
+        f"{what[0].upper()}{what[1:]} raised {type(exc).__name__} at t = {float(t):.10g}: {exc}"
+    )

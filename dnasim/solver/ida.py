@@ -9,11 +9,18 @@ Re-initialisation is the caller's ``reinitialise(t, y, yp) -> (y, yp)``
 (consistent y' and algebraic y with the differential y kept; for plants the
 damped Newton of ``dnasim.initialization``, as in ``dnasim.backends.IDA``):
 IDACalcIC fails on the large jumps a step of a boundary value causes.
+
+``linsolver``: "dense", "sparse" (SuperLU_MT on ``jac_sparsity``) or "band":
+IDA's band solver with the equations matched to the unknowns and both put in
+reverse Cuthill-McKee order (``dnasim.solver.band.BandOrdering``, the ordering
+dnasim's own band LU uses); the permutation is applied at the boundary to IDA
+(residual, switches, results), so callers see the original order.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse
 
 
 def solve_ida(
@@ -46,6 +53,27 @@ def solve_ida(
     algebraic = np.asarray(algebraic, dtype=bool)
     if linsolver is None:
         linsolver = "dense" if n < 200 or jac_sparsity is None else "sparse"
+    # IDA sees the unknowns u = y[cols] and the equations F[rows]: for the band solver
+    # the equations matched to the unknowns and both reverse-Cuthill-McKee ordered
+    # (dnasim.solver.band), so that dF/du + cj dF/du' has kl, ku diagonals; identity
+    # orders otherwise.
+    rows = cols = np.arange(n)
+    band = {}
+    if linsolver == "band":
+        from dnasim.solver.band import BandOrdering
+
+        pattern = scipy.sparse.csc_matrix(jac_sparsity, dtype=float)
+        ordering = BandOrdering.of(pattern)
+        if ordering is None:
+            raise ValueError("the sparsity pattern is structurally singular: no band ordering")
+        rows, cols = ordering.rows, ordering.cols
+        band = {"lband": ordering.kl, "uband": ordering.ku}
+
+    def to_y(u):
+        y = np.empty(n)
+        y[cols] = u
+        return y
+
     events = list(events)
     # Scalar switches count 1, vector switches (attribute ``size``) their size.
     sizes = [int(g.size) if hasattr(g, "size") else 1 for g in events]
@@ -53,7 +81,7 @@ def solve_ida(
     n_events = int(sum(sizes))
     directions = [_directions(g, m) for g, m in zip(events, sizes, strict=True)]
     directions = np.concatenate(directions) if events else np.zeros(0)
-    alg_idx = np.flatnonzero(algebraic)
+    alg_idx = np.flatnonzero(algebraic[cols])
     stats = {"steps": 0, "residual_evals": 0, "restarts": 0}
     counter = [0]
 
@@ -63,20 +91,21 @@ def solve_ida(
     # towards the tstop with ever smaller steps.
     current_stop = [np.inf]
 
-    def resfn(t, y, yp, res):
+    def resfn(t, u, up, res):
         counter[0] += 1
         if t >= current_stop[0]:
             t = np.nextafter(current_stop[0], -np.inf)
-        res[:] = residual(t, y, yp)
+        res[:] = residual(t, to_y(u), to_y(up))[rows]
 
     def make(calc):
         opts = dict(
             rtol=rtol,
-            atol=np.asarray(atol, dtype=float) * np.ones(n),
+            atol=(np.asarray(atol, dtype=float) * np.ones(n))[cols],
             algebraic_idx=alg_idx,
             max_order=min(max_order, 5),
             max_num_steps=max_num_steps,
             linsolver=linsolver,
+            **band,
         )
         if linsolver == "sparse":
             opts["sparsity"] = jac_sparsity
@@ -89,7 +118,8 @@ def solve_ida(
             opts["calc_init_dt"] = 1e-3 * (t_end - t0)
         if events:
 
-            def eventsfn(t, y, yp, out):
+            def eventsfn(t, u, up, out):
+                y, yp = to_y(u), to_y(up)
                 for g, k, m in zip(events, offsets, sizes, strict=True):
                     if hasattr(g, "size"):
                         out[k : k + m] = g(t, y, yp)
@@ -108,7 +138,7 @@ def solve_ida(
     stops = sorted(s for s in tstops if t0 < s < t_end) + [t_end]
     t, y, yp = t0, np.array(y0, float), np.array(yp0, float)
     solver = make(False)
-    solver.init_step(t, y, yp)
+    solver.init_step(t, y[cols], yp[cols])
     success, message = True, "reached t_end"
     while t < t_end * (1 - 1e-15) - 1e-300:
         stop = next(s for s in stops if s > t + 1e-12 * max(1.0, abs(t)))
@@ -118,8 +148,9 @@ def solve_ida(
             success, message = False, res.message
             break
         t_new = float(np.atleast_1d(res.t)[-1])
-        y = np.array(res.y).reshape(-1)[-n:] if np.ndim(res.y) == 1 else np.array(res.y)[-1]
-        yp = np.array(res.yp).reshape(-1)[-n:] if np.ndim(res.yp) == 1 else np.array(res.yp)[-1]
+        u = np.array(res.y).reshape(-1)[-n:] if np.ndim(res.y) == 1 else np.array(res.y)[-1]
+        up = np.array(res.yp).reshape(-1)[-n:] if np.ndim(res.yp) == 1 else np.array(res.yp)[-1]
+        y, yp = to_y(u), to_y(up)
         hist.append((t_new, t_new - t, 0))
         t = t_new
         stats["steps"] += 1
@@ -152,7 +183,7 @@ def solve_ida(
             stats["restarts"] += 1
             y, yp = reinitialise(t, y, yp)
             solver = make(False)
-            solver.init_step(t, y, yp)
+            solver.init_step(t, y[cols], yp[cols])
     stats["residual_evals"] = counter[0]
     return DAEResult(
         t=np.array(ts),
