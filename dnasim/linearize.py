@@ -155,8 +155,9 @@ def _input_hook(plant, dae, ref):
     link = getattr(plant, "links", {}).get((cname, pname))
     if link is not None:
         ref = f"{link[0]}.{link[1]}"
-        src = plant.components[link[0]]
-        port = next((p for p in src.signal_outputs() if p.name == link[1]), None)
+        src = plant.components.get(link[0])  # None: a node's p or h ("n_hdr.p")
+        outs = src.signal_outputs() if src is not None else ()
+        port = next((p for p in outs if p.name == link[1]), None)
         if port is not None and getattr(port, "variable", None):
             ref = f"{link[0]}.{port.variable}"
     if ref in dae.index:
