@@ -177,9 +177,9 @@ def signal_sources(plant):
         found = resolve(sname, ref, comp, sname in nodes)
         if found is None:
             found = (
-                f"no component named '{sname}' and no node of that name (signal source "
-                f"'{sname}.{ref}': a signal comes from a component's output or variable, or "
-                "from a node's " + ", ".join(NODE_QUANTITIES) + ")"
+                f"no component named '{sname}' (and no node) for the signal source "
+                f"'{sname}.{ref}', which must be a component's output or variable, or a "
+                "node's " + ", ".join(NODE_QUANTITIES)
             )
         if isinstance(found, str):
             problems.append(f"component '{dname}': signal input '{inp}': {found}")
@@ -251,14 +251,21 @@ def signal_loops(system) -> list[str]:
     if not rows:
         return []
     alg = system.algebraic
-    cols = sorted({g for b in blocks for g in b.gidx if alg[g] and g >= system.n_node_vars})
-    owned = {g for b in blocks for g in b.gidx if system.var_owner[g] == b.comp.name}
-    cols = [g for g in cols if g in owned]
-    col_pos = {g: k for k, g in enumerate(cols)}
+    owned = sorted(
+        {g for b in blocks for g in b.gidx if system.var_owner[g] == b.comp.name}
+    )
+    # unknowns of the index-1 system: the algebraic variables and the derivatives
+    # of the differential ones (a state itself is known at each instant)
+    col_pos = {g: k for k, g in enumerate(owned)}
+    cols = owned
     r, c = [], []
     for k, i in enumerate(rows):
         for g in system.rows_y[i]:
-            if g in col_pos:
+            if g in col_pos and alg[g]:
+                r.append(k)
+                c.append(col_pos[g])
+        for g in system.rows_yp[i]:
+            if g in col_pos and not alg[g]:
                 r.append(k)
                 c.append(col_pos[g])
     if not cols:
@@ -285,33 +292,31 @@ def signal_loops(system) -> list[str]:
         members = [rows[k] for k in range(n) if label[k] == lab]
         if len(members) < 2:
             continue
-        vars_in = {cols[k] for k in range(len(cols)) if eq_of_col.get(k) is not None}
-        vars_in = {cols[k] for k, e in eq_of_col.items() if label[e] == lab}
-        links = []
+        solved = {cols[k] for k, e in eq_of_col.items() if label[e] == lab}
+        links = []  # (source, destination) of the links the loop runs through
         for (dname, inp), (sname, ref) in system.links.items():
             b = next((x for x in blocks if x.comp.name == dname), None)
             if b is None or inp not in b.index:
                 continue
             g = b.gidx[b.index[inp]]
-            reads = any(
-                local_rows[i] is b and g in system.rows_y[i] for i in members
-            )
-            if reads and g in vars_in:
-                links.append(f"'{sname}.{ref}' -> '{dname}.{inp}'")
+            reads = any(local_rows[i] is b and g in system.rows_y[i] for i in members)
+            if reads and g in solved:
+                links.append((f"{sname}.{ref}", f"{dname}.{inp}", sname == dname))
         if not links:
             continue
         comps = sorted({system.eq_owner[i] for i in members})
-        own = [lk for lk in links if lk.split("'")[1].split(".")[0] == lk.split("'")[3].split(".")[0]]
-        what = (
-            f"component '{comps[0]}' measures its own output" if own and len(comps) == 1 else
-            "the signals run in a closed loop"
-        )
+        if len(comps) == 1 and all(own for _, _, own in links):
+            what = f"component '{comps[0]}' measures its own output"
+        else:
+            what = "the signals of " + ", ".join(f"'{c}'" for c in comps) + " form a closed loop"
         out.append(
-            f"algebraic loop through signals only: {what} ({', '.join(links)}), with no lag "
-            f"and no plant in the loop, so the equations {', '.join(system.eq_names[i] for i in members)} "
-            "must hold at once and the value is only defined by the loop itself; link the input "
-            "to a measurement of the plant (a sensor or a variable of a fluid component), or "
-            "put a FirstOrderLag in the loop"
+            f"algebraic loop through signals only: {what} ("
+            + ", ".join(f"'{a}' -> '{b}'" for a, b, _ in links)
+            + "), with no lag and no plant in the loop: the equations "
+            + ", ".join(system.eq_names[i] for i in members)
+            + " must hold at once, and the loop alone defines the value. Link the input to a "
+            "measurement of the plant (a sensor, a node's p, or a variable of a fluid "
+            "component), or put a FirstOrderLag in the loop"
         )
     return out
 

@@ -446,6 +446,7 @@ def linearize(
                     Jm[row, k] = 1.0 / scale[k]
                     Mm = np.zeros((n, n))
                     Mm[:, : len(diff)] = Jyp
+                    Mm[row, : len(diff)] = 0.0  # the replaced row has no derivative left
                     Mm[:, len(diff) :] = Jm[:, alg]
                     return Mm
 

@@ -994,7 +994,7 @@ def _component(
             continue
         spec.inputs[inp] = src
     for inp in sin:
-        if inp not in inputs:
+        if inp not in inputs and not unchecked:  # unchecked: the broken link says it
             errors.add(
                 table,
                 "inputs",
@@ -1106,10 +1106,10 @@ def _network(specs: list[ComponentSpec], errors: _Errors, broken: dict | None = 
                     errors.add(
                         sub,
                         inp,
-                        f"no component named '{comp}'"
-                        f"{_suggest(comp, list(by_name) + list(node_members))} and no node of "
-                        f"that name (signal source '{src}': a signal comes from a component's "
-                        "output or variable, or from a node's p, h or T)",
+                        f"no component named '{comp}' (and no node) for the signal source "
+                        f"'{src}', which must be a component's output or variable, or a "
+                        "node's p, h or T"
+                        f"{_suggest(comp, list(by_name) + list(node_members))}",
                     )
                 continue
             outs = other.signal_outputs
