@@ -406,7 +406,7 @@ class Component:
     def _validate(self, p: Param, value):
         if value is None:
             return None
-        if p.kind not in ("string", "bool") and isinstance(value, str):
+        if p.kind not in ("string", "bool", "list") and isinstance(value, str):
             from dnasim.units import UnitError
 
             try:
