@@ -251,9 +251,7 @@ def signal_loops(system) -> list[str]:
     if not rows:
         return []
     alg = system.algebraic
-    owned = sorted(
-        {g for b in blocks for g in b.gidx if system.var_owner[g] == b.comp.name}
-    )
+    owned = sorted({g for b in blocks for g in b.gidx if system.var_owner[g] == b.comp.name})
     # unknowns of the index-1 system: the algebraic variables and the derivatives
     # of the differential ones (a state itself is known at each instant)
     col_pos = {g: k for k, g in enumerate(owned)}

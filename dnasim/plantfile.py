@@ -779,7 +779,10 @@ def _spec_builder(comps: dict, registry, errors: _Errors):
         needs = any(per_signal(cls, p) for p in params_of(cls)) if cls is not None else False
         if needs and None in units and isinstance(table.get("inputs"), dict):
             refs = list(table["inputs"].values())
-            units = [u if u is not None else ref_unit(r, (cname,)) for u, r in zip(units, refs)]
+            units = [
+                u if u is not None else ref_unit(r, (cname,))
+                for u, r in zip(units, refs, strict=False)
+            ]
         built[cname] = _component(cname, table, registry, errors, tuple(units))
         building.discard(cname)
         return built[cname]
@@ -1155,9 +1158,7 @@ def _port(ports, name):
     return next((q for q in ports or () if getattr(q, "name", None) == name), None)
 
 
-def _link_dimension_problem(
-    dest: ComponentSpec, inp: str, src, out: str, have: str | None = None
-):
+def _link_dimension_problem(dest: ComponentSpec, inp: str, src, out: str, have: str | None = None):
     """Why the signal ``src.out`` cannot drive ``dest.inp`` (units of another dimension),
     or None. ``src`` is a ComponentSpec, or a node name with ``have`` its unit.
     Inputs with unit "*" take any signal."""

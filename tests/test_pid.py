@@ -105,9 +105,7 @@ def test_d_part_with_setpoint_weight_kicks_by_kp_n():
     # c_d = 1: a step of w by 1 makes m_D jump by -Kp N (e_D = w - y jumps by 1,
     # the filter state x_f cannot jump): m_D = Kp N (e_D - x_f)
     Kp, N = 2.0, 8.0
-    res = run(
-        loop(Step(1.0, 0.0, 1.0), Kp=Kp, T_i=6.0, T_d=2.0, N=N, c_d=1.0), 1.5, max_step=0.01
-    )
+    res = run(loop(Step(1.0, 0.0, 1.0), Kp=Kp, T_i=6.0, T_d=2.0, N=N, c_d=1.0), 1.5, max_step=0.01)
     # the output row at a time event holds the values after it; the row before
     # is the last step before the event
     k = int(np.flatnonzero(res.t == 1.0)[0])

@@ -87,9 +87,10 @@ class Param:
     """A component parameter.
 
     ``unit`` is an SI unit string ("Pa", "K", "kg/s", "J/kg", "m3", "W/K", "1", "s").
-    ``kind`` is "number", "string", "bool", "int" or "list" (a list of numbers in SI). With ``time_function=True`` the
-    value may be a number or a ``dnasim.timefunctions`` function of time; the
-    component then reads it as ``self.param_at("name", t)``.
+    ``kind`` is "number", "string", "bool", "int" or "list" (a list of numbers in
+    SI). With ``time_function=True`` the value may be a number or a
+    ``dnasim.timefunctions`` function of time; the component then reads it as
+    ``self.param_at("name", t)``.
     ``choices`` restricts a string parameter. ``default=REQUIRED`` means the user
     must give it; ``default=None`` means "not given" (optional).
     """

@@ -60,9 +60,7 @@ class PIDController(Component):
     PARAMS = (
         Param("Kp", "1", None, "proportional gain [output unit per measured unit]", per_signal=-1),
         Param("Kc", "1", None, "per-unit gain (instead of Kp; needs measured_span)"),
-        Param(
-            "measured_span", "1", None, "span of the measured signal (per unit)", per_signal=1
-        ),
+        Param("measured_span", "1", None, "span of the measured signal (per unit)", per_signal=1),
         Param("output_span", "1", None, "span of the output (per unit; default z_max - z_min)"),
         Param("T_i", "s", None, "integral time (not given: no integral part)", min=0.0),
         Param("T_d", "s", 0.0, "derivative time (0: no D part)", min=0.0),
@@ -88,7 +86,9 @@ class PIDController(Component):
         ),
         Param("anti_windup", "1", True, "back-calculation anti-windup", kind="bool"),
         Param("T_t", "s", None, "tracking time (default sqrt(T_i T_d), or T_i)", min=0.0),
-        Param("tracking", "1", False, "use the signal input 'track' (actuator position)", kind="bool"),
+        Param(
+            "tracking", "1", False, "use the signal input 'track' (actuator position)", kind="bool"
+        ),
         Param(
             "active",
             "1",

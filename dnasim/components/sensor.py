@@ -109,7 +109,7 @@ class _NodeSensor(_Sensor):
 class PressureSensor(_NodeSensor):
     """Pressure of a node, with an optional first-order lag.
 
-      T_lag dp_s/dt = p - p_s   (p_s = p for T_lag = 0)        [Pa]
+    T_lag dp_s/dt = p - p_s   (p_s = p for T_lag = 0)        [Pa]
     """
 
     PARAMS = (
@@ -127,7 +127,7 @@ class PressureSensor(_NodeSensor):
 class EnthalpySensor(_NodeSensor):
     """Specific enthalpy of the fluid flowing into a node, with an optional lag.
 
-      T_lag dh_s/dt = h - h_s   (h_s = h for T_lag = 0)        [J/kg]
+    T_lag dh_s/dt = h - h_s   (h_s = h for T_lag = 0)        [J/kg]
     """
 
     PARAMS = PressureSensor.PARAMS[:1] + (
@@ -230,7 +230,7 @@ class MassFlowSensor(_SignalSensor):
         Param("y0", "kg/s", None, "initial reading (given start; default: the flow)"),
         Param("m_nominal", "kg/s", 1.0, "typical flow (scales the error tolerance)", min=0.0),
     )
-    SIGNAL_INPUTS = (SignalPort("u", "kg/s", "the flow measured, e.g. \"valve.m\""),)
+    SIGNAL_INPUTS = (SignalPort("u", "kg/s", 'the flow measured, e.g. "valve.m"'),)
     SIGNAL_OUTPUTS = (SignalPort("m", "kg/s", "measured mass flow", variable="m_s"),)
     Y = ("m_s", "kg/s", 1.0, "measured mass flow")
 
@@ -250,6 +250,6 @@ class LevelSensor(_SignalSensor):
         _lag_param(),
         Param("y0", "m", None, "initial reading (given start; default: the level)"),
     )
-    SIGNAL_INPUTS = (SignalPort("u", "m", "the level measured, e.g. \"drum.level\""),)
+    SIGNAL_INPUTS = (SignalPort("u", "m", 'the level measured, e.g. "drum.level"'),)
     SIGNAL_OUTPUTS = (SignalPort("level", "m", "measured level", variable="l_s"),)
     Y = ("l_s", "m", 1.0, "measured level")

@@ -261,9 +261,7 @@ class Limiter(_Modes):
 
     def init_discrete_state(self, t0, x, xp):
         u, old = x["u"], self._mode(x)
-        mode = (
-            "high" if u > self.params["y_max"] else "low" if u < self.params["y_min"] else "free"
-        )
+        mode = "high" if u > self.params["y_max"] else "low" if u < self.params["y_min"] else "free"
         x.modes["mode"] = mode
         return mode != old
 
@@ -443,7 +441,7 @@ class Table(_Block):
 class DeadTime(_Block):
     """Dead time T_dead approximated by n lags of T_dead/n in series (see the module doc).
 
-      (T_dead/n) dz_1/dt = u - z_1,  (T_dead/n) dz_k/dt = z_{k-1} - z_k,  y = z_n
+    (T_dead/n) dz_1/dt = u - z_1,  (T_dead/n) dz_k/dt = z_{k-1} - z_k,  y = z_n
     """
 
     PARAMS = (
