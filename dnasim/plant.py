@@ -109,6 +109,14 @@ class Plant:
             if isinstance(found, str):
                 raise PlantError(found)
         ins = [s.name for s in dst.signal_inputs()]
+        declared = {s.name: s for s in type(dst).SIGNAL_INPUTS}
+        if inp not in ins and inp in declared:  # a parameter replaces the input
+            doc = declared[inp].doc
+            raise PlantError(
+                f"component '{dst.name}' ({type(dst).__name__}) has no signal input "
+                f"'{inp}' with these parameters: {inp} is the {doc}; give the parameter or "
+                "link the input, not both"
+            )
         if inp not in ins:
             raise PlantError(
                 f"component '{dst.name}' ({type(dst).__name__}) has no signal input '{inp}'; "

@@ -198,3 +198,15 @@ def test_python_api_links_and_errors():
     ring.link("b.y", "a.u")
     with pytest.raises(PlantError, match="the signals of 'a', 'b' form a closed loop"):
         ring.compile()
+
+
+def test_python_api_valve_with_opening_and_link_says_so():
+    from dnasim.components.signal_blocks import Step
+    from dnasim.components.valve import Valve
+    from dnasim.plant import Plant
+
+    plant = Plant("x")
+    plant.add(Valve("v", C=1e-3, opening=0.5))
+    plant.add(Step("s"))
+    with pytest.raises(PlantError, match="the parameter 'opening' is not given.*not both"):
+        plant.link("s.y", "v.z")
