@@ -698,7 +698,7 @@ def _signal_units(comps: dict, registry) -> dict[str, list[str | None]]:
     for name, table in comps.items():
         if not isinstance(table, dict) or not isinstance(table.get("inputs"), dict):
             continue
-        for src in table["inputs"].values():
+        for src in _measured_first(table["inputs"]):
             unit = None
             if isinstance(src, str) and src.count(".") == 1:
                 cname, oname = src.split(".")
@@ -715,6 +715,13 @@ def _signal_units(comps: dict, registry) -> dict[str, list[str | None]]:
                         unit = port.unit
             out.setdefault(name, []).append(unit)
     return out
+
+
+def _measured_first(inputs: dict) -> list:
+    """The sources of a component's inputs, the one of ``measured`` first: parameters
+    in the unit of the signal (``Param.per_signal``) take the measured signal's."""
+    keys = sorted(inputs, key=lambda k: k != "measured")
+    return [inputs[k] for k in keys]
 
 
 def _spec_builder(comps: dict, registry, errors: _Errors):
@@ -778,7 +785,7 @@ def _spec_builder(comps: dict, registry, errors: _Errors):
         cls = registry.get(tname) if isinstance(tname, str) else None
         needs = any(per_signal(cls, p) for p in params_of(cls)) if cls is not None else False
         if needs and None in units and isinstance(table.get("inputs"), dict):
-            refs = list(table["inputs"].values())
+            refs = _measured_first(table["inputs"])
             units = [
                 u if u is not None else ref_unit(r, (cname,))
                 for u, r in zip(units, refs, strict=False)

@@ -218,3 +218,38 @@ def test_default_tracking_time():
 def test_bad_parameters_are_named(params, words):
     with pytest.raises(PlantError, match=words):
         PIDController("c", **params)
+
+
+def test_tracking_input_bounds_the_integral_at_an_external_limit():
+    # the actuator (a Limiter [0, 1]) saturates outside the controller, whose own
+    # limits are wide; with tracking = true the back-calculation uses the actuator
+    # position: dm_I/dt = Kp e/T_i + (track - v)/T_t = (1 - m_I)/T_i in saturation
+    from dnasim.components.signal_blocks import Limiter
+
+    plant = Plant("loop")
+    plant.add(FirstOrderLag("G", T=T, k=K))
+    plant.add(Limiter("act", y_min=0.0, y_max=1.0))
+    plant.add(
+        PIDController(
+            "pid",
+            setpoint=_Steps(),
+            Kp=0.8,
+            T_i=5.0,
+            z_min=-100.0,
+            z_max=100.0,
+            tracking=True,
+            error_sign="setpoint-measured",
+            measured_nominal=1.0,
+        )
+    )
+    plant.link("pid.z", "act.u")
+    plant.link("act.y", "G.u")
+    plant.link("act.y", "pid.track")
+    plant.link("G.y", "pid.measured")
+    res = run(plant, 200.0)
+    enter, leave = [e["t"] for e in res.events if e["name"] == "act.upper"][:2]
+    assert enter == 1.0 and leave == 40.0
+    sat = (res.t > enter) & (res.t < leave)
+    t0, m0 = res.t[sat][0], res["pid.m_I"][sat][0]
+    exact = 1.0 + (m0 - 1.0) * np.exp(-(res.t[sat] - t0) / 5.0)
+    assert np.max(np.abs(res["pid.m_I"][sat] - exact)) < TOL

@@ -149,6 +149,8 @@ class PIDController(Component):
         if not self.T_t > 0:
             raise PlantError(f"component '{name}': the tracking time T_t must be > 0 s")
         manual = any(P["active"](t) < 0.5 for t in (0.0, *P["active"].breakpoints))
+        #: whether the output ever follows z_track (then the output equation reads it)
+        self.has_manual = manual
         if manual and not P["tracking"] and P["z_manual"] is None:
             raise PlantError(
                 f"component '{name}': 'active' switches to manual, so the output needs a manual "
@@ -271,7 +273,7 @@ class PIDController(Component):
             ),
             Equation(
                 "output",
-                y=("z", "v", *track),
+                y=("z", "v", *(track if self.has_manual else ())),
                 doc="z = v (free), z_max (high), z_min (low), z_track (manual)",
                 residual=self._output,
             ),
