@@ -288,8 +288,6 @@ def signal_loops(system) -> list[str]:
             local_rows[i] = b
     for lab in range(ncomp):
         members = [rows[k] for k in range(n) if label[k] == lab]
-        if len(members) < 2:
-            continue
         solved = {cols[k] for k, e in eq_of_col.items() if label[e] == lab}
         links = []  # (source, destination) of the links the loop runs through
         for (dname, inp), (sname, ref) in system.links.items():
@@ -304,7 +302,8 @@ def signal_loops(system) -> list[str]:
             continue
         comps = sorted({system.eq_owner[i] for i in members})
         if len(comps) == 1 and all(own for _, _, own in links):
-            what = f"component '{comps[0]}' measures its own output"
+            verb = "measures" if any(b.endswith(".measured") for _, b, _ in links) else "reads"
+            what = f"component '{comps[0]}' {verb} its own output"
         else:
             what = "the signals of " + ", ".join(f"'{c}'" for c in comps) + " form a closed loop"
         out.append(

@@ -210,3 +210,14 @@ def test_python_api_valve_with_opening_and_link_says_so():
     plant.add(Step("s"))
     with pytest.raises(PlantError, match="the parameter 'opening' is not given.*not both"):
         plant.link("s.y", "v.z")
+
+
+def test_a_block_fed_by_its_own_output_is_a_loop():
+    from dnasim.components.signal_blocks import Gain
+    from dnasim.plant import Plant
+
+    plant = Plant("self")
+    plant.add(Gain("g", k=0.5))
+    plant.link("g.y", "g.u")
+    with pytest.raises(PlantError, match="component 'g' reads its own output"):
+        plant.compile()
