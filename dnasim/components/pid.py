@@ -1,48 +1,5 @@
 """PIDController: PID with a filtered D part, output limits as switch variables,
-back-calculation anti-windup, tracking/activation (bumpless transfer) and per-unit gains.
-
-Symbols (units: [m] the measured signal's unit, [u] the output's unit ``unit``):
-
-  error         e = s (measured - w(t))                     [m]   s = +1 or -1 (error_sign)
-  proportional  m_p = Kp e                                  [u]
-  derivative    (T_d/N) dx_f/dt = e_D - x_f,   e_D = s (measured - c_d w(t))        [m]
-                m_D = Kp N (e_D - x_f)                      [u]   (T_d > 0; else m_D = 0)
-  integral      dm_I/dt = Kp/T_i e + (z - v)/T_t            [u/s] (automatic, anti_windup)
-                dm_I/dt = Kp/T_i e                                (automatic, no anti-windup)
-                dm_I/dt = (z - v)/T_t                             (manual: tracking)
-  demand        v = m_p + m_I + m_D                         [u]
-  output        z = v (mode free), z_max (high), z_min (low), z_track (manual)   [u]
-
-Transfer function from e to v in the free mode (T_i, T_d > 0):
-  Kp (1 + 1/(T_i s) + T_d s / (1 + T_d s / N)).
-
-The D part acts on e_D: with the set-point weight c_d = 0 (default) on the
-measurement only, so a set-point step gives no derivative kick. Its filter time
-constant is T_d/N.
-
-Output limits are switch variables (seed eq. 10.13e), positive while the mode
-holds, direction -1:
-  upper: mode free: z_max - v -> "high";  mode high: v - z_max -> back to "free"
-  lower: mode free: v - z_min -> "low";   mode low:  z_min - v -> back to "free"
-
-Back-calculation anti-windup (default on): while saturated, z - v != 0 drives
-the integral back with the tracking time constant T_t (default sqrt(T_i T_d),
-or T_i for a PI), so v stays near the limit: at rest in saturation
-v - z_max = T_t Kp e / T_i. v is continuous, so the mode is left when v crosses
-the limit, without a reset and without chattering. In the free mode z = v and the
-tracking term is zero.
-
-Tracking and activation (bumpless transfer): ``active`` is a time function (1:
-automatic, 0: manual). In manual the output is z_track (the signal input
-``track`` when ``tracking = true``, else the time function ``z_manual``) and the
-integral tracks it, dm_I/dt = (z_track - v)/T_t, so at the switch to automatic v
-is within the tracking error of z: the output does not jump. With ``tracking =
-true`` the input ``track`` is also the actuator position used by the
-anti-windup in automatic: z_track replaces z in (z - v)/T_t.
-
-Per-unit gains: give ``Kc`` [1] and ``measured_span`` [m] instead of Kp; then
-Kp = Kc * output_span / measured_span, output_span = z_max - z_min unless given.
-"""
+back-calculation anti-windup, tracking/activation (bumpless transfer) and per-unit gains."""
 
 from __future__ import annotations
 
@@ -55,7 +12,51 @@ __all__ = ["PIDController"]
 
 
 class PIDController(Component):
-    """PID controller: see the module docstring for the equations."""
+    """PID controller with a filtered D part, output limits as switch variables,
+    back-calculation anti-windup, tracking/activation and per-unit gains.
+
+    Symbols (units: [m] the measured signal's unit, [u] the output's unit ``unit``):
+
+      error         e = s (measured - w(t))                     [m]   s = +1 or -1 (error_sign)
+      proportional  m_p = Kp e                                  [u]
+      derivative    (T_d/N) dx_f/dt = e_D - x_f,   e_D = s (measured - c_d w(t))        [m]
+                    m_D = Kp N (e_D - x_f)                      [u]   (T_d > 0; else m_D = 0)
+      integral      dm_I/dt = Kp/T_i e + (z - v)/T_t            [u/s] (automatic, anti_windup)
+                    dm_I/dt = Kp/T_i e                                (automatic, no anti-windup)
+                    dm_I/dt = (z - v)/T_t                             (manual: tracking)
+      demand        v = m_p + m_I + m_D                         [u]
+      output        z = v (mode free), z_max (high), z_min (low), z_track (manual)   [u]
+
+    Transfer function from e to v in the free mode (T_i, T_d > 0):
+      Kp (1 + 1/(T_i s) + T_d s / (1 + T_d s / N)).
+
+    The D part acts on e_D: with the set-point weight c_d = 0 (default) on the
+    measurement only, so a set-point step gives no derivative kick. Its filter time
+    constant is T_d/N.
+
+    Output limits are switch variables (seed eq. 10.13e), positive while the mode
+    holds, direction -1:
+      upper: mode free: z_max - v -> "high";  mode high: v - z_max -> back to "free"
+      lower: mode free: v - z_min -> "low";   mode low:  z_min - v -> back to "free"
+
+    Back-calculation anti-windup (default on): while saturated, z - v != 0 drives
+    the integral back with the tracking time constant T_t (default sqrt(T_i T_d),
+    or T_i for a PI), so v stays near the limit: at rest in saturation
+    v - z_max = T_t Kp e / T_i. v is continuous, so the mode is left when v crosses
+    the limit, without a reset and without chattering. In the free mode z = v and the
+    tracking term is zero.
+
+    Tracking and activation (bumpless transfer): ``active`` is a time function (1:
+    automatic, 0: manual). In manual the output is z_track (the signal input
+    ``track`` when ``tracking = true``, else the time function ``z_manual``) and the
+    integral tracks it, dm_I/dt = (z_track - v)/T_t, so at the switch to automatic v
+    is within the tracking error of z: the output does not jump. With ``tracking =
+    true`` the input ``track`` is also the actuator position used by the
+    anti-windup in automatic: z_track replaces z in (z - v)/T_t.
+
+    Per-unit gains: give ``Kc`` [1] and ``measured_span`` [m] instead of Kp; then
+    Kp = Kc * output_span / measured_span, output_span = z_max - z_min unless given.
+    """
 
     PARAMS = (
         Param("Kp", "1", None, "proportional gain [output unit per measured unit]", per_signal=-1),

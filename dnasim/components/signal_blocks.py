@@ -212,7 +212,11 @@ class _Modes(_Block):
 
 
 class Limiter(_Modes):
-    """y = u within [y_min, y_max]; y = y_max above, y = y_min below (switches)."""
+    """y = u (mode free), y = y_max (high), y = y_min (low).
+
+    Switches, positive while the mode holds: upper: free: y_max - u (enter high),
+    high: u - y_max (back to free); lower: free: u - y_min, low: y_min - u.
+    """
 
     PARAMS = (
         Param("y_min", "1", doc="lower limit [unit of u]"),
@@ -267,7 +271,13 @@ class Limiter(_Modes):
 
 
 class RateLimiter(_Modes):
-    """dy/dt = (u - y)/T held within [-R_down, R_up] (switches; see the module doc)."""
+    """Rate limiter: T dy/dt = u - y (mode free), dy/dt = R_up (up), dy/dt = -R_down (down).
+
+    Switches, positive while the mode holds: up: free: R_up - (u - y)/T (enter),
+    up: (u - y)/T - R_up (leave); down alike. A step of u by D > R_up T from rest
+    gives y = y0 + R_up t until u - y = R_up T, then the lag's exponential
+    approach. T (default 0.1 s) keeps every mode index 1 (an ideal y = u would not).
+    """
 
     PARAMS = (
         Param("R_up", "1/s", doc="largest rising rate [unit of u per second]", min=0.0),
@@ -358,7 +368,12 @@ def _points(comp, xs, ys, xname, yname):
 
 
 class Table(_Block):
-    """y = f(u), piecewise linear through (x_i, y_i), held flat outside (segments are modes)."""
+    """y = f(u), piecewise linear through (x_i, y_i), held flat outside.
+
+    The segment i (x_i <= u < x_{i+1}) is a mode: y = y_i + (y_{i+1} - y_i)(u - x_i)
+    / (x_{i+1} - x_i); the vector switch (u - x_i, x_{i+1} - u) moves to the
+    neighbouring segment when u leaves it (no kink inside Newton).
+    """
 
     PARAMS = (
         Param("x", "1", doc="input values x_i, strictly increasing [unit of u]", kind="list"),
