@@ -1004,7 +1004,7 @@ def _component(
             continue
         spec.inputs[inp] = src
     for inp in sin:
-        if inp not in inputs and not unchecked:  # unchecked: the broken link says it
+        if inp not in inputs and None not in signal_units:  # else the broken link says it
             errors.add(
                 table,
                 "inputs",
