@@ -189,7 +189,15 @@ class PIDController(Component):
         out = [
             Variable("e", self.error_unit, span_m * 0.01, doc="control error"),
             Variable("m_p", unit, self.span_out, doc="proportional part"),
-            Variable("m_I", unit, self.span_out, doc="integral part"),
+            # without an I part m_I is a bias that only tracking moves: a steady start
+            # keeps it at integral0 (an accumulator) instead of leaving it undetermined
+            Variable(
+                "m_I",
+                unit,
+                self.span_out,
+                doc="integral part",
+                accumulator=P["T_i"] is None,
+            ),
         ]
         if self.has_d:
             out += [
