@@ -6,13 +6,18 @@
 Steps, each once:
 
 1. graph checks on the ``Plant`` (names, wiring; ``structure.analyse_graph``);
-2. media per port and per node (``resolve_media``): a port group's fluid is its
+2. signal sources (``signal_sources``): every ``inputs`` link resolved to a signal
+   output, a component variable or a node quantity, with its unit and a dimension
+   check against the input; a node temperature gets an ideal probe (``dnasim.signals``);
+   an unknown source is reported alone (nothing that follows from it);
+3. media per port and per node (``resolve_media``): a port group's fluid is its
    component's parameter (``medium``, or e.g. a heat exchanger's ``hot_medium``),
    else it propagates through the nodes from the groups that name one, else the
    plant's default medium. A node joins ports of one fluid only;
-3. the ``System`` is built (index maps, sparsity, switch functions);
-4. structure checks on the System (counts, matching, index 1, connectivity;
-   ``structure.analyse_system``).
+4. the ``System`` is built (index maps, sparsity, switch functions);
+5. structure checks on the System (counts, matching, index 1, connectivity;
+   ``structure.analyse_system``), and algebraic loops through signals only
+   (``signal_loops``).
 
 The System keeps no reference to the Plant; the components it holds get their
 media (``component.port_media[port]``, and ``component.medium`` when all their
@@ -24,7 +29,7 @@ from __future__ import annotations
 from dnasim.errors import PlantError
 from dnasim.structure import StructureReport, analyse_graph, analyse_system
 
-__all__ = ["compile", "check", "resolve_media"]
+__all__ = ["compile", "check", "resolve_media", "signal_sources"]
 
 
 def resolve_media(plant) -> tuple[dict, dict, list[str]]:
@@ -133,6 +138,10 @@ def check(plant):
     analyse_graph(plant, report)
     if report.errors:
         return report, None
+    plant, problems = signal_sources(plant)
+    if problems:
+        report.errors.extend(problems)
+        return report, None
     port_fluids, node_fluids, errors = resolve_media(plant)
     node_media, port_media = _media_objects(plant, port_fluids, node_fluids, errors)
     try:
@@ -142,10 +151,171 @@ def check(plant):
         report.errors.append(str(err))
         return report, None
     analyse_system(plant, system, report)
+    if not report.errors:
+        report.errors.extend(signal_loops(system))
     report.errors.extend(errors)
     if not report.errors:
         report.errors.extend(_state_problems(plant))
     return report, system
+
+
+def signal_sources(plant):
+    """Resolve every signal link (``dnasim.signals``): ``(plant, problems)``.
+
+    Returns the plant to compile: the given one, or, when a link reads a node
+    temperature ("n_hdr.T"), a copy with one ideal ``TemperatureSensor`` (tau = 0)
+    probing that node, named "n_hdr~T", and the link reading its output. The
+    caller's plant is not changed. ``problems``: plain-words messages naming both
+    ends of each bad link (unknown source, a vector without an index, a
+    dimension that does not fit the input)."""
+    from dnasim.signals import NODE_QUANTITIES, dimension_problem, node_sensor_name, resolve
+
+    nodes = set(plant.node_names())
+    problems, sources = [], {}
+    for (dname, inp), (sname, ref) in plant.links.items():
+        comp = plant.components.get(sname)
+        found = resolve(sname, ref, comp, sname in nodes)
+        if found is None:
+            found = (
+                f"no component named '{sname}' (and no node) for the signal source "
+                f"'{sname}.{ref}', which must be a component's output or variable, or a "
+                "node's " + ", ".join(NODE_QUANTITIES)
+            )
+        if isinstance(found, str):
+            problems.append(f"component '{dname}': signal input '{inp}': {found}")
+        else:
+            sources[(dname, inp)] = found
+    if problems:
+        return plant, problems
+
+    def unit_of(key, seen=()):
+        src = sources[key]
+        if src.unit != "*" or key in seen:
+            return src.unit
+        ins = [k for k in sources if k[0] == src.owner]  # the block's own inputs
+        return unit_of(ins[0], (*seen, key)) if ins else "*"
+
+    for (dname, inp), src in sources.items():
+        dst = plant.components[dname]
+        port = next(q for q in dst.signal_inputs() if q.name == inp)
+        msg = dimension_problem(
+            f"{src.owner}.{src.ref}",
+            unit_of((dname, inp)),
+            inp,
+            f"{type(dst).__name__} '{dname}'",
+            str(port.unit or "1"),
+            port.doc,
+        )
+        if msg:
+            problems.append(msg)
+    if problems:
+        return plant, problems
+    temps = sorted({s.owner for s in sources.values() if s.kind == "node" and s.ref == "T"})
+    if not temps:
+        return plant, []
+    from dnasim.components.sensor import TemperatureSensor
+    from dnasim.plant import Plant
+
+    copy = Plant(plant.name, medium=plant.default_medium)
+    copy.components = dict(plant.components)
+    copy.connections = dict(plant.connections)
+    copy.links = dict(plant.links)
+    copy._duplicates = list(plant.duplicates)
+    if hasattr(plant, "simulation"):
+        copy.simulation = plant.simulation
+    for node in temps:
+        name = node_sensor_name(node)
+        copy.components[name] = TemperatureSensor(name, T_lag=0.0)
+        copy.connections[(name, "port")] = node
+    for key, src in sources.items():
+        if src.kind == "node" and src.ref == "T":
+            copy.links[key] = (node_sensor_name(src.owner), "T")
+    return copy, []
+
+
+def signal_loops(system) -> list[str]:
+    """Algebraic loops through signals only, in plain words (empty when none).
+
+    The equations and algebraic variables of the components without fluid ports
+    (controllers, blocks, sensors on signals) are matched, and the strongly
+    connected components of the resulting dependency graph are the blocks that
+    must be solved simultaneously. A block that reads a signal input (a link) is a
+    loop closed through signals with no lag in it, e.g. a controller measuring its
+    own output: reported with the links it runs through."""
+    import numpy as np
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
+
+    blocks = [b for b in system.blocks if not b.comp.fluid_ports()]
+    rows = [i for b in blocks for i in range(b.eq_slice.start, b.eq_slice.stop)]
+    if not rows:
+        return []
+    alg = system.algebraic
+    owned = sorted({g for b in blocks for g in b.gidx if system.var_owner[g] == b.comp.name})
+    # unknowns of the index-1 system: the algebraic variables and the derivatives
+    # of the differential ones (a state itself is known at each instant)
+    col_pos = {g: k for k, g in enumerate(owned)}
+    cols = owned
+    r, c = [], []
+    for k, i in enumerate(rows):
+        for g in system.rows_y[i]:
+            if g in col_pos and alg[g]:
+                r.append(k)
+                c.append(col_pos[g])
+        for g in system.rows_yp[i]:
+            if g in col_pos and not alg[g]:
+                r.append(k)
+                c.append(col_pos[g])
+    if not cols:
+        return []
+    bi = sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(len(rows), len(cols)))
+    match = maximum_bipartite_matching(bi.tocsc(), perm_type="row")  # col -> row or -1
+    eq_of_col = {k: int(e) for k, e in enumerate(match) if e >= 0}
+    # equation a depends on equation b when a reads the variable b is solved for
+    dr, dc = [], []
+    for a, b in zip(r, c, strict=True):
+        e = eq_of_col.get(b)
+        if e is not None and e != a:
+            dr.append(a)
+            dc.append(e)
+    n = len(rows)
+    dep = sp.csr_matrix((np.ones(len(dr)), (dr, dc)), shape=(n, n))
+    ncomp, label = connected_components(dep, directed=True, connection="strong")
+    out = []
+    local_rows = {}
+    for b in blocks:
+        for i in range(b.eq_slice.start, b.eq_slice.stop):
+            local_rows[i] = b
+    for lab in range(ncomp):
+        members = [rows[k] for k in range(n) if label[k] == lab]
+        solved = {cols[k] for k, e in eq_of_col.items() if label[e] == lab}
+        links = []  # (source, destination) of the links the loop runs through
+        for (dname, inp), (sname, ref) in system.links.items():
+            b = next((x for x in blocks if x.comp.name == dname), None)
+            if b is None or inp not in b.index:
+                continue
+            g = b.gidx[b.index[inp]]
+            reads = any(local_rows[i] is b and g in system.rows_y[i] for i in members)
+            if reads and g in solved:
+                links.append((f"{sname}.{ref}", f"{dname}.{inp}", sname == dname))
+        if not links:
+            continue
+        comps = sorted({system.eq_owner[i] for i in members})
+        if len(comps) == 1 and all(own for _, _, own in links):
+            verb = "measures" if any(b.endswith(".measured") for _, b, _ in links) else "reads"
+            what = f"component '{comps[0]}' {verb} its own output"
+        else:
+            what = "the signals of " + ", ".join(f"'{c}'" for c in comps) + " form a closed loop"
+        out.append(
+            f"algebraic loop through signals only: {what} ("
+            + ", ".join(f"'{a}' -> '{b}'" for a, b, _ in links)
+            + "), with no lag and no plant in the loop: the equations "
+            + ", ".join(system.eq_names[i] for i in members)
+            + " must hold at once, and the loop alone defines the value. Link the input to a "
+            "measurement of the plant (a sensor, a node's p, or a variable of a fluid "
+            "component), or put a FirstOrderLag in the loop"
+        )
+    return out
 
 
 def _state_problems(plant, t0: float = 0.0) -> list[str]:

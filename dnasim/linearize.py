@@ -155,8 +155,9 @@ def _input_hook(plant, dae, ref):
     link = getattr(plant, "links", {}).get((cname, pname))
     if link is not None:
         ref = f"{link[0]}.{link[1]}"
-        src = plant.components[link[0]]
-        port = next((p for p in src.signal_outputs() if p.name == link[1]), None)
+        src = plant.components.get(link[0])  # None: a node's p or h ("n_hdr.p")
+        outs = src.signal_outputs() if src is not None else ()
+        port = next((p for p in outs if p.name == link[1]), None)
         if port is not None and getattr(port, "variable", None):
             ref = f"{link[0]}.{port.variable}"
     if ref in dae.index:
@@ -445,6 +446,7 @@ def linearize(
                     Jm[row, k] = 1.0 / scale[k]
                     Mm = np.zeros((n, n))
                     Mm[:, : len(diff)] = Jyp
+                    Mm[row, : len(diff)] = 0.0  # the replaced row has no derivative left
                     Mm[:, len(diff) :] = Jm[:, alg]
                     return Mm
 

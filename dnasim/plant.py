@@ -90,16 +90,36 @@ class Plant:
         self.connections[key] = node
 
     def link(self, output_ref: str, input_ref: str) -> None:
-        """Feed signal output "comp.output" into signal input "comp.input"."""
-        src, out = self._split(output_ref, "output")
-        dst, inp = self._split(input_ref, "input")
-        outs = [s.name for s in src.signal_outputs()]
-        if out not in outs:
+        """Feed a signal source into signal input "comp.input".
+
+        The source is a signal output ("pi.z"), any component variable ("valve.m",
+        "pipe.m[3]", "drum.level") or a node quantity ("n_hdr.p", "n_hdr.h",
+        "n_hdr.T"); see ``dnasim.signals``. Component sources are checked here;
+        node sources when the plant is compiled (the node may be connected later)."""
+        from dnasim.signals import resolve, split_ref
+
+        parts = split_ref(output_ref)
+        if parts is None:
             raise PlantError(
-                f"component '{src.name}' ({type(src).__name__}) has no signal output '{out}'; "
-                f"its signal outputs are: {', '.join(outs) or 'none'}"
+                f"plant '{self.name}': expected a signal source 'component.output', "
+                f"'component.variable' or 'node.p', got {output_ref!r}"
             )
+        sname, out = parts
+        dst, inp = self._split(input_ref, "input")
+        src = self.components.get(sname)
+        if src is not None:
+            found = resolve(sname, out, src)
+            if isinstance(found, str):
+                raise PlantError(found)
         ins = [s.name for s in dst.signal_inputs()]
+        declared = {s.name: s for s in type(dst).SIGNAL_INPUTS}
+        if inp not in ins and inp in declared:  # a parameter replaces the input
+            doc = declared[inp].doc
+            raise PlantError(
+                f"component '{dst.name}' ({type(dst).__name__}) has no signal input "
+                f"'{inp}' with these parameters: {inp} is the {doc}; give the parameter or "
+                "link the input, not both"
+            )
         if inp not in ins:
             raise PlantError(
                 f"component '{dst.name}' ({type(dst).__name__}) has no signal input '{inp}'; "
@@ -107,7 +127,7 @@ class Plant:
             )
         if (dst.name, inp) in self.links:
             raise PlantError(f"component '{dst.name}': signal input '{inp}' is already linked")
-        self.links[(dst.name, inp)] = (src.name, out)
+        self.links[(dst.name, inp)] = (sname, out)
 
     # ------------------------------------------------------------- queries
     def node_names(self) -> list[str]:
@@ -137,9 +157,8 @@ class Plant:
         for (cname, pname), node in self.connections.items():
             g.add_edge(("component", cname), ("node", node), key=pname, kind="fluid")
         for (dname, inp), (sname, out) in self.links.items():
-            g.add_edge(
-                ("component", sname), ("component", dname), key=f"{out}->{inp}", kind="signal"
-            )
+            kind = "component" if sname in self.components else "node"
+            g.add_edge((kind, sname), ("component", dname), key=f"{out}->{inp}", kind="signal")
         return g
 
     @property

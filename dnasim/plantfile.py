@@ -717,7 +717,7 @@ def _signal_units(comps: dict, registry) -> dict[str, list[str | None]]:
     for name, table in comps.items():
         if not isinstance(table, dict) or not isinstance(table.get("inputs"), dict):
             continue
-        for src in table["inputs"].values():
+        for src in _measured_first(table["inputs"]):
             unit = None
             if isinstance(src, str) and src.count(".") == 1:
                 cname, oname = src.split(".")
@@ -734,6 +734,86 @@ def _signal_units(comps: dict, registry) -> dict[str, list[str | None]]:
                         unit = port.unit
             out.setdefault(name, []).append(unit)
     return out
+
+
+def _measured_first(inputs: dict) -> list:
+    """The sources of a component's inputs, the one of ``measured`` first: parameters
+    in the unit of the signal (``Param.per_signal``) take the measured signal's."""
+    keys = sorted(inputs, key=lambda k: k != "measured")
+    return [inputs[k] for k in keys]
+
+
+def _spec_builder(comps: dict, registry, errors: _Errors):
+    """``spec_of(name)``: the ComponentSpec of component ``name`` (None when invalid),
+    built once. A component whose parameters are in the unit of its measured signal
+    (a controller's Kp, set point) needs that unit first: a signal output's unit
+    comes from the class; a variable's ("drum.level"), or a block output's that
+    follows its input ("*"), from the source built first (``dnasim.signals``); a
+    node quantity's ("n_hdr.p") is fixed."""
+    from dnasim.signals import NODE_QUANTITIES, resolve, split_ref
+
+    base_units = _signal_units(comps, registry)
+    nodes = {
+        n
+        for t in comps.values()
+        if isinstance(t, dict) and isinstance(t.get("ports"), dict)
+        for n in t["ports"].values()
+        if isinstance(n, str)
+    }
+    built: dict[str, ComponentSpec | None] = {}
+    building: set[str] = set()
+
+    def first_input(cname):
+        table = comps.get(cname)
+        inputs = table.get("inputs") if isinstance(table, dict) else None
+        return next(iter(inputs.values()), None) if isinstance(inputs, dict) else None
+
+    def ref_unit(ref, seen=()):
+        parts = split_ref(ref)
+        if parts is None:
+            return None
+        c, v = parts
+        if c not in comps:
+            return NODE_QUANTITIES[v][0] if c in nodes and v in NODE_QUANTITIES else None
+        if c in seen:
+            return None
+        other = spec_of(c)
+        if other is None or other.instance is None:
+            return None
+        found = resolve(c, v, other.instance)
+        if isinstance(found, str) or found is None:
+            return None
+        unit = found.unit
+        if unit == "*":
+            return ref_unit(first_input(c), (*seen, c))
+        try:
+            parse_unit(unit)
+        except UnitError:
+            return None
+        return unit
+
+    def spec_of(cname):
+        if cname in built:
+            return built[cname]
+        if cname in building:
+            return None  # a loop of signals: its units stay unknown
+        building.add(cname)
+        table = comps[cname]
+        units = list(base_units.get(cname, ()))
+        tname = table.get("type") if isinstance(table, dict) else None
+        cls = registry.get(tname) if isinstance(tname, str) else None
+        needs = any(per_signal(cls, p) for p in params_of(cls)) if cls is not None else False
+        if needs and None in units and isinstance(table.get("inputs"), dict):
+            refs = _measured_first(table["inputs"])
+            units = [
+                u if u is not None else ref_unit(r, (cname,))
+                for u, r in zip(units, refs, strict=False)
+            ]
+        built[cname] = _component(cname, table, registry, errors, tuple(units))
+        building.discard(cname)
+        return built[cname]
+
+    return spec_of
 
 
 def _component(
@@ -943,7 +1023,7 @@ def _component(
             continue
         spec.inputs[inp] = src
     for inp in sin:
-        if inp not in inputs:
+        if inp not in inputs and None not in signal_units:  # else the broken link says it
             errors.add(
                 table,
                 "inputs",
@@ -1041,9 +1121,25 @@ def _network(specs: list[ComponentSpec], errors: _Errors, broken: dict | None = 
             sub = ("components", c.name, "inputs")
             comp, out = src.split(".")
             other = by_name.get(comp)
+            if other is None and comp in node_members:
+                found = _signal_source(comp, out, None, True)
+                if isinstance(found, str):
+                    errors.add(sub, inp, found)
+                    continue
+                msg = _link_dimension_problem(c, inp, comp, out, found.unit)
+                if msg:
+                    errors.add(sub, inp, msg)
+                continue
             if other is None:
-                if comp not in broken:
-                    errors.add(sub, inp, f"no component named '{comp}'{_suggest(comp, by_name)}")
+                if comp not in broken and comp not in broken_nodes:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"no component named '{comp}' (and no node) for the signal source "
+                        f"'{src}', which must be a component's output or variable, or a "
+                        "node's p, h or T"
+                        f"{_suggest(comp, list(by_name) + list(node_members))}",
+                    )
                 continue
             outs = other.signal_outputs
             if out in outs:
@@ -1051,50 +1147,78 @@ def _network(specs: list[ComponentSpec], errors: _Errors, broken: dict | None = 
                 if msg:
                     errors.add(sub, inp, msg)
                 continue
-            if out not in outs:
+            if other.instance is not None:
+                found = _signal_source(comp, out, other.instance, False)
+                if not isinstance(found, str):
+                    msg = _link_dimension_problem(c, inp, comp, out, found.unit)
+                    if msg:
+                        errors.add(sub, inp, msg)
+                    continue
                 if out in other.fluid_ports:
-                    errors.add(
-                        sub,
-                        inp,
-                        f"'{src}' is a fluid port of {other.type}: a signal input must be linked "
-                        f"to a signal output (outputs of {comp}: {', '.join(outs) or 'none'})",
+                    found = (
+                        f"'{src}' is a fluid port of {other.type}: a signal is a signal output, "
+                        f"a variable, or a node's p, h or T (write the node's name, e.g. "
+                        f"'<node>.p'); {found}"
                     )
-                else:
-                    errors.add(
-                        sub,
-                        inp,
-                        f"{other.type} '{comp}' has no signal output '{out}'{_suggest(out, outs)} "
-                        f"(outputs: {', '.join(outs) or 'none'})",
-                    )
+                errors.add(sub, inp, found)
+                continue
+            if out in other.fluid_ports:
+                errors.add(
+                    sub,
+                    inp,
+                    f"'{src}' is a fluid port of {other.type}: a signal input must be linked "
+                    f"to a signal output, a variable or a node's p, h or T (outputs of {comp}: "
+                    f"{', '.join(outs) or 'none'})",
+                )
+            # otherwise: the source component's own parameters are in error (reported
+            # with it); whether it has this variable cannot be told without it
+
+
+def _signal_source(owner, ref, instance, is_node):
+    from dnasim.signals import resolve
+
+    return resolve(owner, ref, instance, is_node)
 
 
 def _port(ports, name):
     return next((q for q in ports or () if getattr(q, "name", None) == name), None)
 
 
-def _link_dimension_problem(dest: ComponentSpec, inp: str, src: ComponentSpec, out: str):
+def _link_dimension_problem(dest: ComponentSpec, inp: str, src, out: str, have: str | None = None):
     """Why the signal ``src.out`` cannot drive ``dest.inp`` (units of another dimension),
-    or None. Inputs with unit "*" take any signal."""
-    q_in = _port(getattr(dest.cls, "SIGNAL_INPUTS", ()), inp)
-    q_out = _port(getattr(src.cls, "SIGNAL_OUTPUTS", ()), out)
-    if q_in is None or q_out is None:
+    or None. ``src`` is a ComponentSpec, or a node name with ``have`` its unit.
+    Inputs with unit "*" take any signal."""
+    from dnasim.signals import dimension_problem
+
+    q_in = _instance_port(dest, "signal_inputs", "SIGNAL_INPUTS", inp)
+    if q_in is None:
         return None
-    want, have = input_unit(dest.cls, q_in), str(getattr(q_out, "unit", "1") or "1")
-    if want == "*":
-        return None
-    try:
-        uw, uh = parse_unit(want), parse_unit(have)
-    except UnitError:
-        return None
-    if uw.dims == uh.dims:
-        return None
-    doc = getattr(q_in, "doc", "") or ""
-    return (
-        f"dimension mismatch: '{src.name}.{out}' is a {uh.dimension} signal [{have}], but the "
-        f"input '{inp}' of {dest.type} '{dest.name}' expects {uw.dimension} [{want}]"
-        + (f" ({doc})" if doc else "")
-        + "; link a signal of that dimension, e.g. a controller output"
+    src_name = src if isinstance(src, str) else src.name
+    if have is None:
+        q_out = _instance_port(src, "signal_outputs", "SIGNAL_OUTPUTS", out)
+        if q_out is None:
+            return None
+        have = str(getattr(q_out, "unit", "1") or "1")
+    return dimension_problem(
+        f"{src_name}.{out}",
+        have,
+        inp,
+        f"{dest.type} '{dest.name}'",
+        input_unit(dest.cls, q_in),
+        getattr(q_in, "doc", "") or "",
     )
+
+
+def _instance_port(spec: ComponentSpec, method: str, attr: str, name: str):
+    """The port ``name``: from the built instance when there is one (ports and their
+    units may depend on parameters), else from the class."""
+    inst = spec.instance
+    if inst is not None and hasattr(inst, method):
+        try:
+            return _port(getattr(inst, method)(), name)
+        except Exception:  # a plugin's port method failing: fall back to the class
+            pass
+    return _port(getattr(spec.cls, attr, ()), name)
 
 
 def _plugin_imports(v, path, errors) -> list[str]:
@@ -1179,10 +1303,10 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
                 limit_message("the number of components", len(comps), LIMITS["components"]),
             )
             errors.raise_if_any()
-        sig_units = _signal_units(comps, registry)
+        spec_of = _spec_builder(comps, registry, errors)
         broken = {}
         for cname, ctable in comps.items():
-            spec = _component(cname, ctable, registry, errors, tuple(sig_units.get(cname, ())))
+            spec = spec_of(cname)
             if spec is not None:
                 specs.append(spec)
             else:

@@ -174,7 +174,8 @@ def _check_counts(plant, dae, report):
     for b in dae.blocks:
         comp = b.comp
         n_eq = b.eq_slice.stop - b.eq_slice.start
-        n_own = sum(1 for g in b.gidx if g >= dae.n_node_vars and dae.var_owner[g] == comp.name)
+        # unique: a component may read one of its own variables as a signal input
+        n_own = len({g for g in b.gidx if g >= dae.n_node_vars and dae.var_owner[g] == comp.name})
         if n_eq != n_own:
             what = "too many" if n_eq > n_own else "too few"
             report.errors.append(

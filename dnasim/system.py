@@ -174,12 +174,11 @@ class System:
         # each component learns the units of the signals linked to its inputs, so that
         # quantities in the unit of a measured signal (a controller's set point and
         # error) carry it into the results
+        sources = _link_sources(plant)
         for comp in plant.components.values():
             comp.input_units = {}
-        for (dname, inp), (sname, out) in plant.links.items():
-            src = plant.components[sname]
-            unit = next((s.unit for s in src.signal_outputs() if s.name == out), "1")
-            plant.components[dname].input_units[inp] = unit
+        for (dname, inp), src in sources.items():
+            plant.components[dname].input_units[inp] = src.unit
         names, units, nominal, owner, accumulator = [], [], [], [], []
         self.node_index = {}
         for node in plant.node_names():
@@ -241,10 +240,11 @@ class System:
                     first = index[f"{vname}[0]"]
                     index[vname] = slice(first, first + (g.stop - g.start))
             for sig in comp.signal_inputs():
-                src_comp, src_port = plant.links[(comp.name, sig.name)]
-                src = plant.components[src_comp]
-                var = next(s.variable for s in src.signal_outputs() if s.name == src_port)
-                add_local(sig.name, own[src_comp][var])
+                src = sources[(comp.name, sig.name)]  # dnasim.signals.Source
+                if src.kind == "node":
+                    add_local(sig.name, self.node_index[src.owner] + (src.ref == "h"))
+                else:
+                    add_local(sig.name, own[src.owner][src.variable])
             eqs = comp.equations()
             start = len(eq_names)
             for eq in eqs:
@@ -485,6 +485,30 @@ class System:
             vals = b.comp.output_values(t, b.local(y), b.local(yp))
             row.append(np.asarray(vals, dtype=float))
         return np.concatenate(row)
+
+
+def _link_sources(plant) -> dict:
+    """(component, input) -> ``dnasim.signals.Source`` of every link; a signal
+    output of unit "*" gets the unit of its block's first linked input."""
+    from dnasim.signals import resolve
+
+    nodes = set(plant.node_names())
+    out = {}
+    for key, (sname, ref) in plant.links.items():
+        src = resolve(sname, ref, plant.components.get(sname), sname in nodes)
+        if not hasattr(src, "kind") or (src.kind == "node" and src.ref == "T"):
+            raise PlantError(  # dnasim.compiler.signal_sources reports these first
+                f"component '{key[0]}': signal input '{key[1]}': cannot read '{sname}.{ref}'"
+                + (f": {src}" if isinstance(src, str) else "")
+            )
+        out[key] = src
+    for _ in range(len(out)):
+        for key, src in out.items():
+            if src.unit == "*":
+                first = next((s for k, s in out.items() if k[0] == src.owner), None)
+                if first is not None and first.unit != "*":
+                    out[key] = type(src)(src.owner, src.ref, src.kind, src.variable, first.unit)
+    return out
 
 
 def _group_nodes(node_names, node_index, node_media):

@@ -89,10 +89,70 @@ def hx_plant():
     return plant
 
 
+def signals_plant():
+    """A water line with every sensor on it, a PID (manual until 0.5 s, so the
+    probe at t = 1 s sees it automatic) and every signal block in a chain."""
+    from dnasim.components import sensor as S
+    from dnasim.components import signal_blocks as B
+    from dnasim.components.pid import PIDController
+    from dnasim.timefunctions import Step
+
+    plant = Plant("signals", medium="Water")
+    plant.add(PressureBoundary("src", p=10e5, T=350.0, m_nominal=1.0))
+    plant.add(Valve("v", C=1e-3, opening=0.5, m_nominal=1.0))
+    plant.add(PressureBoundary("sink", p=1e5, m_nominal=1.0))
+    for a, b in [("src.port", "a"), ("v.inlet", "a"), ("v.outlet", "b"), ("sink.port", "b")]:
+        plant.connect(a, b)
+    for cls in (S.PressureSensor, S.EnthalpySensor, S.QualitySensor):
+        plant.add(cls(cls.__name__.lower(), T_lag=1.0))
+        plant.connect(f"{cls.__name__.lower()}.port", "a")
+    plant.add(S.MassFlowSensor("flow", T_lag=1.0))
+    plant.link("v.m", "flow.u")
+    plant.add(B.Ramp("lvl", t0=0.0, t1=10.0, start=0.5, end=1.0, unit="m"))
+    plant.add(S.LevelSensor("level", T_lag=1.0))
+    plant.link("lvl.y", "level.u")
+    plant.add(B.Step("track", t0=5.0, before=0.3, after=0.4))
+    plant.add(
+        PIDController(
+            "pid",
+            Kp=1e-6,
+            T_i=5.0,
+            T_d=1.0,
+            c_d=0.5,
+            setpoint=9e5,
+            tracking=True,
+            active=Step(0.5, 0.0, 1.0),
+        )
+    )
+    plant.link("pressuresensor.p", "pid.measured")
+    plant.link("track.y", "pid.track")
+    plant.add(B.Gain("gain", k=2.0))
+    plant.add(B.TableSource("ts", times=[0.0, 10.0], values=[0.1, 0.2]))
+    plant.add(B.Sum("sum", n_inputs=3, w1=0.5, w2=0.5, w3=1.0))
+    plant.link("pid.z", "gain.u")
+    plant.link("gain.y", "sum.u1")
+    plant.link("flow.m", "sum.u2")
+    plant.link("ts.y", "sum.u3")
+    chain = [
+        B.FirstOrderLag("lag", T=2.0),
+        B.Limiter("lim", y_min=-10.0, y_max=10.0),
+        B.RateLimiter("rate", R_up=100.0),
+        B.Table("tab", x=[-10.0, 0.0, 10.0], y=[0.0, 1.0, 3.0]),
+        B.DeadTime("dead", T_dead=2.0, n_stages=3),
+    ]
+    prev = "sum.y"
+    for block in chain:
+        plant.add(block)
+        plant.link(prev, f"{block.name}.u")
+        prev = f"{block.name}.y"
+    return plant
+
+
 PLANTS = {
     "air_pipe": lambda: air_pipe_plant(3),
     "attemperator": attemperator_plant,
     "hx": hx_plant,
+    "signals": signals_plant,
 }
 
 

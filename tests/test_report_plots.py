@@ -45,7 +45,7 @@ def test_report_is_self_contained(run_dir):
     assert "Plotly.newPlot" in text  # the interactive plots, with plotly embedded
     # the event table with its iterates (Table 10.1) and the plant structure
     assert "Table 10.1" in text and "upper" in text
-    assert "Attemperator" in text and "PIController" in text
+    assert "Attemperator" in text and "PIDController" in text
     assert "equations" in text and "Fig. 10.7" in text
     # axis titles with quantity and engineering unit (plotly's JSON escapes the degree sign)
     assert re.search(r"temperature \[(°|\\u00b0)C\]", text) and re.search(

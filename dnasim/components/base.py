@@ -94,9 +94,10 @@ class Param:
     """A component parameter.
 
     ``unit`` is an SI unit string ("Pa", "K", "kg/s", "J/kg", "m3", "W/K", "1", "s").
-    ``kind`` is "number", "string", "bool" or "int". With ``time_function=True`` the
-    value may be a number or a ``dnasim.timefunctions`` function of time; the
-    component then reads it as ``self.param_at("name", t)``.
+    ``kind`` is "number", "string", "bool", "int" or "list" (a list of numbers in
+    SI). With ``time_function=True`` the value may be a number or a
+    ``dnasim.timefunctions`` function of time; the component then reads it as
+    ``self.param_at("name", t)``.
     ``choices`` restricts a string parameter. ``default=REQUIRED`` means the user
     must give it; ``default=None`` means "not given" (optional).
     """
@@ -443,7 +444,7 @@ class Component:
     def _validate(self, p: Param, value):
         if value is None:
             return None
-        if p.kind not in ("string", "bool") and isinstance(value, str):
+        if p.kind not in ("string", "bool", "list") and isinstance(value, str):
             from dnasim.units import UnitError
 
             try:
@@ -472,6 +473,17 @@ class Component:
                     f"{value!r}"
                 )
             return bool(value)
+        if p.kind == "list":
+            ok = isinstance(value, (list, tuple, np.ndarray)) and all(
+                isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+                for v in value
+            )
+            if not ok:
+                raise PlantError(
+                    f"component '{self.name}': parameter '{p.name}' must be a list of numbers "
+                    f"[{p.unit}], got {value!r}"
+                )
+            return [float(v) for v in value]
         if p.kind == "int":
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise PlantError(

@@ -1,4 +1,7 @@
-"""PIController: proportional-integral controller with output limits (seed eqs. 10.13a-e)."""
+"""PIController: proportional-integral controller with output limits (seed eqs. 10.13a-e).
+
+``dnasim.components.pid.PIDController`` is the general controller (D part,
+back-calculation anti-windup, tracking, per-unit gains); this one is the seed's."""
 
 from __future__ import annotations
 
@@ -64,7 +67,13 @@ class PIController(Component):
             kind="string",
             choices=("measured-setpoint", "setpoint-measured"),
         ),
-        Param("anti_windup", "1", False, "hold the integrator while saturated", kind="bool"),
+        Param(
+            "anti_windup",
+            "1",
+            True,
+            "hold the integrator while saturated (false: the seed's plain eqs. 10.13)",
+            kind="bool",
+        ),
         Param("integral0", "1", 0.0, "initial integral part m_I (given start)"),
         Param(
             "measured_nominal",

@@ -311,6 +311,41 @@ def solve_dae(
                 y_new, yp_new = consistent(
                     solver.t, solver.y, solver.yp, "the values after the time event (tstop)"
                 )
+                # a switch that the jump carried across its zero (a set-point step taking
+                # a controller past its limit) fires at the tstop itself
+                for _ in range(MAX_RESTARTS_AT_ONE_TIME):
+                    g_plus = [sw.value(solver.t, y_new, yp_new) for sw in switches]
+                    k = next(
+                        (
+                            k
+                            for k, sw in enumerate(switches)
+                            if sw.action is not None and np.any(sw.crossed(g_new[k], g_plus[k]))
+                        ),
+                        None,
+                    )
+                    if k is None:
+                        break
+                    sw = switches[k]
+                    which = np.flatnonzero(sw.crossed(g_new[k], g_plus[k]))
+                    for j in which:
+                        event_log.append(
+                            {
+                                "event": k,
+                                "name": sw.names[j],
+                                "element": int(j),
+                                "t": solver.t,
+                                "iterates": [],
+                                "terminal": sw.terminal,
+                            }
+                        )
+                        t_events[k].append(solver.t)
+                        y_events[k].append(y_new)
+                    c = _Crossing(k, solver.t, y_new, yp_new, which, int(which[0]), [], True)
+                    y_new, yp_new = _run_action(sw, c, problem.n)
+                    y_new, yp_new = consistent(
+                        solver.t, y_new, yp_new, f"the values after the switch {sw.names[j]!r}"
+                    )
+                    g_new = g_plus
                 next_stop = stops[0] if stops else t_end
                 solver.restart(
                     solver.t, y_new, yp_new, solver.restart_step(solver.t, y_new, yp_new, next_stop)
