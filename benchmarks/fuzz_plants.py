@@ -236,26 +236,44 @@ def main(argv=None) -> int:
     commands: Counter = Counter()
     examples: dict[str, list] = {}
     t0 = time.perf_counter()
-    pending = list(chunks)
+    pending = [(c, 0) for c in chunks]  # (seeds, times their pool broke)
     while pending:
         with ProcessPoolExecutor(args.jobs) as pool:
             futures = [
-                (c, pool.submit(_chunk, (c, args.run_fraction, args.timeout))) for c in pending
+                (c, broke, pool.submit(_chunk, (c, args.run_fraction, args.timeout)))
+                for c, broke in pending
             ]
             pending = []
-            for c, fut in futures:
+            for c, broke, fut in futures:
                 try:
                     rows = fut.result()
                 except BrokenProcessPool:
-                    # a worker died: count its chunk as crashes (not re-run: it may die again)
-                    tally["crash"] += len(c)
-                    examples.setdefault("crash", []).append((c[0], "?", f"seeds {c[0]}..{c[-1]}"))
+                    # A worker died, and the pool with it: every chunk still in it fails
+                    # here. Run such a chunk again in a fresh pool; when it breaks a pool
+                    # a second time, run its seeds one by one; a single seed that breaks
+                    # a pool is the crash.
+                    if broke == 0:
+                        pending.append((c, 1))
+                    elif len(c) > 1:
+                        pending.extend(([s], 1) for s in c)
+                    else:
+                        tally["crash"] += 1
+                        examples.setdefault("crash", []).append((c[0], "?", "worker died"))
+                        print(f"  crash: seed {c[0]}", file=sys.stderr)
                     continue
                 for seed, command, outcome, msg in rows:
                     tally[outcome] += 1
                     commands[command] += 1
                     if outcome not in ("clean", "ok"):
                         examples.setdefault(outcome, []).append((seed, command, msg))
+                        print(f"  {outcome}: seed {seed} ({command}): {msg}", file=sys.stderr)
+                # a running tally on stderr, so a run cut short still says how far it got
+                print(
+                    f"[{time.perf_counter() - t0:.0f} s] {sum(tally.values())} cases: "
+                    + " / ".join(f"{o} {tally[o]}" for o in OUTCOMES),
+                    file=sys.stderr,
+                    flush=True,
+                )
     wall = time.perf_counter() - t0
     for outcome, items in examples.items():
         print(f"{outcome}: {len(items)} (first {min(len(items), args.show)}):")

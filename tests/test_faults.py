@@ -478,3 +478,33 @@ def test_check_evaluates_the_prescribed_states(tmp_path, old, new, words):
     assert "internal error" not in result.output and "Traceback" not in result.output
     for w in words:
         assert w in result.output, (w, result.output)
+
+
+# --------------------------------------------------------------------------- 8. back-pressure
+
+
+def test_back_pressure_below_the_fluid_range_is_located(tmp_path):
+    # 0.001 bar = 100 Pa is below IF97's lowest pressure, p_sat(273.15 K) = 611.2 Pa:
+    # no state of the steam leaving through the sink exists, whatever its enthalpy
+    text = ATT.replace('p = "100 bar"', 'p = "0.001 bar"')
+    res = invoke("check", plant(tmp_path, text))
+    assert_located(res, "boundary 'turbine'", "0.001 bar", "outside the range of Water (IF97)")
+
+
+def test_steady_start_without_a_steady_state_names_the_cause():
+    # 0.01 bar is inside IF97's range, but the turbine valve (m = C z sqrt(dp), no
+    # choking) then passes 2.6 times its nominal flow, and the spray controller would
+    # need an opening above 1 to hold its set point: no steady state exists
+    import dnasim
+    from dnasim.errors import PlantError
+    from dnasim.start import initial_values
+
+    spec = dnasim.load_plant(PLANTS / "attemperator.toml")
+    spec.components["turbine"].params["p"] = 1000.0  # [Pa] = 0.01 bar
+    system = dnasim.compile(spec)
+    with pytest.raises(PlantError) as info:
+        initial_values(system, 0.0, "steady")
+    msg = str(info.value)
+    assert msg.index("component 'pi' (PIController)") < msg.index("The solver's report")
+    for words in ("'free' -> 'high'", "pi.z = 1.07", "'turbine_valve'", "choked"):
+        assert words in msg, (words, msg)

@@ -320,8 +320,33 @@ class PressureBoundary(_Boundary):
     def guess_nodes(self, t0):
         p = self.param_at("p", t0)
         if not self.has_supply:
+            self._check_sink_pressure(t0, p)
             return {"port": (p, None)}
         return {"port": (p, self.supply_h(t0, p))}
+
+    #: temperatures [K] at which a sink's pressure is tried in its medium: a pressure
+    #: that none of them accepts is outside the medium's range for any state
+    PROBE_T = (300.0, 600.0, 1000.0)
+
+    def _check_sink_pressure(self, t, p):
+        """Raise BoundaryStateError when no state at pressure p [Pa] exists in the
+        medium (e.g. 0.001 bar for IF97 water, whose range starts at 611.2 Pa): the
+        fluid leaving the plant there could never be evaluated."""
+        medium = getattr(self, "medium", None)
+        if medium is None:
+            return
+        first = None
+        for T in self.PROBE_T:
+            try:
+                medium.h_pT(p, T)
+                return
+            except PropertyError as exc:
+                first = first or exc
+        raise BoundaryStateError(
+            f"boundary '{self.name}' ({type(self).__name__}) at t = {t:.6g} s: the pressure "
+            f"p = {p / 1e5:.6g} bar ({p:.6g} Pa) is outside the range of {medium.label}: no "
+            f"state of the fluid leaving the plant there can be evaluated ({first})"
+        )
 
     def initial_guess(self, t0, x):
         x["m"] = self.flow_guess()
