@@ -184,7 +184,7 @@ def _steady_message(system, t0, causes, after_switch: bool, err) -> str:
         f"The likely cause ({where}): "
         + "; ".join(causes)
         + ". Check the boundary conditions (pressures, temperatures, flows) and the "
-        "controllers' ranges, or start from given initial states (start = \"given\"). "
+        'controllers\' ranges, or start from given initial states (start = "given"). '
         f"The solver's report: {err}"
     )
 
