@@ -508,3 +508,78 @@ def test_steady_start_without_a_steady_state_names_the_cause():
     assert msg.index("component 'pi' (PIController)") < msg.index("The solver's report")
     for words in ("'free' -> 'high'", "pi.z = 1.07", "'turbine_valve'", "choked"):
         assert words in msg, (words, msg)
+
+
+# --------------------------------------------------------------------------- 10. early signals
+
+
+def _catches_sigterm(pid: int) -> bool:
+    """The process has a handler for SIGTERM (bit 15 of SigCgt in /proc/PID/status)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    line = next((s for s in status.splitlines() if s.startswith("SigCgt:")), "SigCgt: 0")
+    return bool(int(line.split()[1], 16) & (1 << (signal.SIGTERM - 1)))
+
+
+def _start_run(out: Path, block: bool):
+    """`python -m dnasim run` on the attemperator into ``out``, which holds a previous
+    run's results. block: SIGTERM and SIGINT blocked across exec, so a signal sent
+    at once stays pending through the interpreter's own start-up (before any line
+    of dnasim runs, where no Python program can catch it) until dnasim's handlers
+    are installed and unblock it."""
+    out.mkdir()
+    for name in RESULT_FILES:
+        (out / name).write_text("stale\n")
+
+    def child():
+        for s in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(s, signal.SIG_DFL)
+        if block:
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM, signal.SIGINT})
+
+    return subprocess.Popen(
+        [sys.executable, "-m", "dnasim", "run", str(PLANTS / "attemperator.toml")]
+        + ["-o", str(out), "-q"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        preexec_fn=child,
+    )
+
+
+def _assert_interrupted_cleanly(proc, out: Path, what: str):
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, (proc.returncode, err)
+    assert len(err.strip().splitlines()) == 1, err  # one line, no traceback
+    assert "interrupted" in err and what in err, err
+    for f in out.iterdir():  # nothing of the previous run; whole rows only
+        text = f.read_text()
+        assert "stale" not in text, f
+        assert text == "" or text.endswith("\n"), f
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_a_signal_at_the_very_start_is_held_until_the_handlers_exist(tmp_path, sig):
+    proc = _start_run(tmp_path / "out", block=True)
+    proc.send_signal(sig)
+    _assert_interrupted_cleanly(
+        proc, tmp_path / "out", "SIGTERM" if sig == signal.SIGTERM else "Ctrl-C"
+    )
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc/PID/status")
+@pytest.mark.parametrize("delay", [0.0, 0.02, 0.1, 0.3, 1.0])
+def test_sigterm_at_any_early_time_gives_one_line_and_no_stale_files(tmp_path, delay):
+    # from the moment the handler exists (polled in /proc, so a loaded machine's slow
+    # interpreter start does not matter) through imports, option parsing, clearing
+    # the output directory, loading the plant and the steady start
+    proc = _start_run(tmp_path / "out", block=False)
+    deadline = time.monotonic() + 60
+    while not _catches_sigterm(proc.pid) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.001)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGTERM)
+    _assert_interrupted_cleanly(proc, tmp_path / "out", "SIGTERM")
