@@ -180,6 +180,8 @@ class System:
             src = plant.components[sname]
             unit = next((s.unit for s in src.signal_outputs() if s.name == out), "1")
             plant.components[dname].input_units[inp] = unit
+        for comp in plant.components.values():  # "0.5 1/K" from Python, now that 1/K is known
+            comp.resolve_signal_units(comp.input_units.values())
         names, units, nominal, owner, accumulator = [], [], [], [], []
         self.node_index = {}
         for node in plant.node_names():

@@ -583,3 +583,108 @@ def test_sigterm_at_any_early_time_gives_one_line_and_no_stale_files(tmp_path, d
     time.sleep(delay)
     proc.send_signal(signal.SIGTERM)
     _assert_interrupted_cleanly(proc, tmp_path / "out", "SIGTERM")
+
+
+# --------------------------------------------------------------------------- 3. gains from Python
+
+
+def _attemperator_with_pi(**params):
+    """The attemperator plant built from Python, its controller given ``params``."""
+    import dnasim
+    from dnasim.components.controller import PIController
+    from dnasim.plant import Plant
+
+    ref = dnasim.load_plant(PLANTS / "attemperator.toml")
+    plant = Plant("att", medium="Water")
+    for c in ref.components.values():
+        plant.add(PIController("pi", **params) if c.name == "pi" else c)
+    for (c, port), node in ref.connections.items():
+        plant.connect(f"{c}.{port}", node)
+    for (c, inp), (s, out) in ref.links.items():
+        plant.link(f"{s}.{out}", f"{c}.{inp}")
+    return ref, plant
+
+
+def test_controller_units_from_python_are_read_as_from_a_plant_file():
+    import dnasim
+
+    ref, plant = _attemperator_with_pi(
+        Kp="0.02 1/K", KI="6e-4 1/(K.s)", setpoint="450 degC", measured_nominal="700 K"
+    )
+    pi = dnasim.compile(plant).components["pi"]
+    for k in ("Kp", "KI", "measured_nominal"):  # the file gives the same in these units
+        assert pi.params[k] == ref.components["pi"].params[k], k
+    assert pi.param_at("setpoint", 0.0) == 723.15  # 450 degC
+
+
+@pytest.mark.parametrize(
+    "value, words",
+    [
+        ("0.02 degC", "absolute temperature"),
+        ("0.02 K", "dimension of temperature"),
+        ("2 %/bar", "1/temperature is expected"),
+    ],
+)
+def test_controller_gain_from_python_refuses_what_a_plant_file_refuses(value, words):
+    import dnasim
+
+    _, plant = _attemperator_with_pi(Kp=value, setpoint=723.15)
+    with pytest.raises(dnasim.PlantError, match="component 'pi'") as info:
+        dnasim.compile(plant)
+    assert "'Kp'" in str(info.value) and words in str(info.value)
+
+
+def test_controller_gain_per_bar_from_python_for_a_pressure_signal():
+    import dnasim
+    from dnasim.components.base import Component, Equation, SignalPort, Variable
+    from dnasim.components.controller import PIController
+    from dnasim.plant import Plant
+
+    class PressureSignal(Component):
+        """A constant pressure signal p = 1e5 Pa (test only)."""
+
+        REGISTER = False
+        USES_MEDIUM = False
+        SIGNAL_OUTPUTS = (SignalPort("p", "Pa", "pressure", variable="p"),)
+
+        def variables(self):
+            return [Variable("p", "Pa", 1e5)]
+
+        def equations(self):
+            return [Equation("p", y=("p",), residual=lambda t, x, xp: x["p"] - 1e5)]
+
+    plant = Plant("signals")
+    plant.add(PressureSignal("src"))
+    plant.add(PIController("pi", Kp="2 %/bar", setpoint="1 bar", measured_nominal="1 bar"))
+    plant.link("src.p", "pi.measured")
+    pi = dnasim.compile(plant).components["pi"]
+    # 2 % per bar = 0.02 / 1e5 Pa (relative 1e-12: the unit conversion's rounding)
+    assert pi.params["Kp"] == pytest.approx(2e-7, rel=1e-12)
+    assert pi.param_at("setpoint", 0.0) == pytest.approx(1e5, rel=1e-12)
+
+
+def test_cli_results_are_the_csv_sink_of_simulate(tmp_path):
+    # one writer (issue 8): `dnasim run` streams through CSVSink and the same rows as
+    # simulate(sinks=[CSVSink]); over the set-point step at 2 min (a time event: a left
+    # limit and a restart row) the two files are identical, byte for byte
+    import dnasim
+    from dnasim.plantfile import load
+    from dnasim.simulation import CSVSink, simulate, simulation_keywords
+
+    loaded = load(PLANTS / "attemperator.toml")
+    loaded.simulation.t_end = 150.0
+    api = tmp_path / "api.csv"
+    simulate(
+        dnasim.compile(loaded.plant),
+        t_end=150.0,
+        sinks=[CSVSink(api)],
+        **simulation_keywords(loaded.simulation),
+    )
+    res = invoke(
+        "run", PLANTS / "attemperator.toml", "-o", tmp_path / "cli", "-q", "--t-end", "150 s"
+    )
+    assert res.exit_code == 0, res.output
+    cli = (tmp_path / "cli" / "results.csv").read_text()
+    assert cli == api.read_text()
+    restart = read_results_csv(tmp_path / "cli" / "results.csv")[2]["restart"]
+    assert restart.sum() >= 1  # the step at 120 s
