@@ -191,10 +191,22 @@ class _Boundary(Component):
         return f"{where}: cannot evaluate the supply enthalpy at {state}{reason}"
 
     def supply_equations(self, p_dep):
+        """The supply equation (none for a sink only): h_supply = h(t), h(p, T(t)) or
+        h_px(p, x(t)) [J/kg], at the boundary's pressure (``supply_pressure``)."""
         if not self.has_supply:
             return []
         dep = ("h_supply",) if self.supply_by == "h" else ("h_supply",) + p_dep
-        return [Equation("supply", y=dep, doc="h_supply = h, h(p, T) or h_px(p, x)")]
+        return [
+            Equation(
+                "supply",
+                y=dep,
+                unit="J/kg",
+                doc="h_supply = h, h(p, T) or h_px(p, x)",
+                residual=lambda t, x, xp: (
+                    x["h_supply"] - self.supply_h(t, self.supply_pressure(t, x))
+                ),
+            )
+        ]
 
     def energy_flow(self, x):
         """E [W] into the plant (see the module doc)."""
@@ -206,12 +218,23 @@ class _Boundary(Component):
     def accumulator_equations(self):
         dep = ("m", "port.h") + (("h_supply",) if self.has_supply else ())
         return [
-            Equation("mass_passed", y=("m",), yp=("M_passed",), doc="dM_passed/dt = m"),
-            Equation("energy_passed", y=dep, yp=("H_passed",), doc="dH_passed/dt = E"),
+            Equation(
+                "mass_passed",
+                y=("m",),
+                yp=("M_passed",),
+                unit="kg/s",
+                doc="dM_passed/dt = m",
+                residual=lambda t, x, xp: xp["M_passed"] - x["m"],
+            ),
+            Equation(
+                "energy_passed",
+                y=dep,
+                yp=("H_passed",),
+                unit="W",
+                doc="dH_passed/dt = E = w(m) h_supply - w(-m) h_node",
+                residual=lambda t, x, xp: xp["H_passed"] - self.energy_flow(x),
+            ),
         ]
-
-    def accumulator_residuals(self, x, xp):
-        return [xp["M_passed"] - x["m"], xp["H_passed"] - self.energy_flow(x)]
 
     def switches(self):
         if self.supply_by == "T" and is_condensable(self.medium):
@@ -306,16 +329,18 @@ class PressureBoundary(_Boundary):
 
     def equations(self):
         return (
-            [Equation("pressure", y=("port.p",))]
+            [
+                Equation(
+                    "pressure",
+                    y=("port.p",),
+                    unit="Pa",
+                    doc="p_node = p(t)",
+                    residual=lambda t, x, xp: x["port.p"] - self.param_at("p", t),
+                )
+            ]
             + self.supply_equations(())
             + self.accumulator_equations()
         )
-
-    def residual(self, t, x, xp):
-        r = [x["port.p"] - self.param_at("p", t)]
-        if self.has_supply:
-            r.append(x["h_supply"] - self.supply_h(t, self.param_at("p", t)))
-        return np.array(r + self.accumulator_residuals(x, xp))
 
     def guess_nodes(self, t0):
         p = self.param_at("p", t0)
@@ -379,16 +404,18 @@ class MassFlowBoundary(_Boundary):
 
     def equations(self):
         return (
-            [Equation("flow", y=("m",))]
+            [
+                Equation(
+                    "flow",
+                    y=("m",),
+                    unit="kg/s",
+                    doc="m = m(t)",
+                    residual=lambda t, x, xp: x["m"] - self.param_at("m", t),
+                )
+            ]
             + self.supply_equations(("port.p",))
             + self.accumulator_equations()
         )
-
-    def residual(self, t, x, xp):
-        r = [x["m"] - self.param_at("m", t)]
-        if self.has_supply:
-            r.append(x["h_supply"] - self.supply_h(t, x["port.p"]))
-        return np.array(r + self.accumulator_residuals(x, xp))
 
     def guess_nodes(self, t0):
         if not self.has_supply or self.params["h"] is None:
