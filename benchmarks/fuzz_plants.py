@@ -230,10 +230,12 @@ def main(argv=None) -> int:
     ap.add_argument("--run-fraction", type=float, default=0.05, help="share run, not check")
     ap.add_argument("--timeout", type=float, default=60.0, help="CPU seconds before a hang")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--chunk", type=int, default=100, help="cases per task (the tally's step)")
     ap.add_argument("--show", type=int, default=5, help="examples printed per bad outcome")
     args = ap.parse_args(argv)
     seeds = list(range(args.seed, args.seed + args.n))
-    chunks = [seeds[i : i + 100] for i in range(0, len(seeds), 100)]
+    k = args.chunk
+    chunks = [seeds[i : i + k] for i in range(0, len(seeds), k)]
     tally: Counter = Counter()
     commands: Counter = Counter()
     examples: dict[str, list] = {}
