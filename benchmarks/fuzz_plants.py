@@ -13,7 +13,7 @@ Outcomes:
     unlocated  exit 2 without a file or option in the message
     internal   "internal error" (a bug path of the command line)
     traceback  an exception escaped the command, or a traceback was printed
-    hang       more than --timeout seconds
+    hang       more than --timeout seconds of CPU time
     crash      a worker process died (segfault, out of memory)
 
 The last line printed is the tally. Usage::
@@ -171,15 +171,17 @@ def classify(command: str, text: str, workdir: str, timeout: float = 60.0) -> tu
     args = [command, path]
     if command == "run":
         args += ["-o", os.path.join(workdir, "out"), "-q", "--t-end", "0.5 s"]
-    old = signal.signal(signal.SIGALRM, _alarm)
-    signal.setitimer(signal.ITIMER_REAL, timeout)
+    # the limit is on CPU time (ITIMER_PROF), not wall time: on a loaded machine at
+    # nice 19 a case that needs 2 s of CPU may take a minute of wall time
+    old = signal.signal(signal.SIGPROF, _alarm)
+    signal.setitimer(signal.ITIMER_PROF, timeout)
     try:
         res = CliRunner().invoke(main, args, catch_exceptions=True)
     except _Hang:
         return "hang", ""
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        signal.signal(signal.SIGPROF, old)
     out = res.output
     if isinstance(res.exception, _Hang):
         return "hang", out
@@ -226,36 +228,56 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=10_000, help="number of mutated plants")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes")
     ap.add_argument("--run-fraction", type=float, default=0.05, help="share run, not check")
-    ap.add_argument("--timeout", type=float, default=60.0, help="seconds before a hang")
+    ap.add_argument("--timeout", type=float, default=60.0, help="CPU seconds before a hang")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--chunk", type=int, default=100, help="cases per task (the tally's step)")
     ap.add_argument("--show", type=int, default=5, help="examples printed per bad outcome")
     args = ap.parse_args(argv)
     seeds = list(range(args.seed, args.seed + args.n))
-    chunks = [seeds[i : i + 100] for i in range(0, len(seeds), 100)]
+    k = args.chunk
+    chunks = [seeds[i : i + k] for i in range(0, len(seeds), k)]
     tally: Counter = Counter()
     commands: Counter = Counter()
     examples: dict[str, list] = {}
     t0 = time.perf_counter()
-    pending = list(chunks)
+    pending = [(c, 0) for c in chunks]  # (seeds, times their pool broke)
     while pending:
         with ProcessPoolExecutor(args.jobs) as pool:
             futures = [
-                (c, pool.submit(_chunk, (c, args.run_fraction, args.timeout))) for c in pending
+                (c, broke, pool.submit(_chunk, (c, args.run_fraction, args.timeout)))
+                for c, broke in pending
             ]
             pending = []
-            for c, fut in futures:
+            for c, broke, fut in futures:
                 try:
                     rows = fut.result()
                 except BrokenProcessPool:
-                    # a worker died: count its chunk as crashes (not re-run: it may die again)
-                    tally["crash"] += len(c)
-                    examples.setdefault("crash", []).append((c[0], "?", f"seeds {c[0]}..{c[-1]}"))
+                    # A worker died, and the pool with it: every chunk still in it fails
+                    # here. Run such a chunk again in a fresh pool; when it breaks a pool
+                    # a second time, run its seeds one by one; a single seed that breaks
+                    # a pool is the crash.
+                    if broke == 0:
+                        pending.append((c, 1))
+                    elif len(c) > 1:
+                        pending.extend(([s], 1) for s in c)
+                    else:
+                        tally["crash"] += 1
+                        examples.setdefault("crash", []).append((c[0], "?", "worker died"))
+                        print(f"  crash: seed {c[0]}", file=sys.stderr)
                     continue
                 for seed, command, outcome, msg in rows:
                     tally[outcome] += 1
                     commands[command] += 1
                     if outcome not in ("clean", "ok"):
                         examples.setdefault(outcome, []).append((seed, command, msg))
+                        print(f"  {outcome}: seed {seed} ({command}): {msg}", file=sys.stderr)
+                # a running tally on stderr, so a run cut short still says how far it got
+                print(
+                    f"[{time.perf_counter() - t0:.0f} s] {sum(tally.values())} cases: "
+                    + " / ".join(f"{o} {tally[o]}" for o in OUTCOMES),
+                    file=sys.stderr,
+                    flush=True,
+                )
     wall = time.perf_counter() - t0
     for outcome, items in examples.items():
         print(f"{outcome}: {len(items)} (first {min(len(items), args.show)}):")

@@ -126,6 +126,7 @@ def run(n, solver, rtol=1e-6, linsolver=None):
                 tstops=dae.tstops(0.0, T_END),
                 calc_initial=False,
                 dense_output=False,
+                throw=True,
             )
         else:
             from dnasim.solver.ida import solve_ida

@@ -147,6 +147,7 @@ def consistent_start(p):
         algebraic=p.get("algebraic"),
         rtol=1e-10,
         atol=1e-14,
+        throw=True,
     )
     return r.y[:, 0], r.yp[:, 0]
 
@@ -224,6 +225,7 @@ def run_all(rtols, repeat):
                         atol=atol,
                         calc_initial=False,
                         dense_output=False,
+                        throw=True,
                     )
                 except DAEError as exc:
                     print(f"# dnasim stopped on {p['name']} at rtol {rtol}: {exc}")

@@ -107,6 +107,7 @@ class NordsieckBDF:
                 dense_output=self.dense_output,
                 max_steps=self.max_steps,
                 keep_output=self.keep_output,
+                throw=True,
             )
         except DAEError as err:
             res = getattr(err, "result", None)

@@ -9,13 +9,22 @@ commands, so ``dnasim --help`` starts fast.
 
 from __future__ import annotations
 
-import os
 import signal
 import sys
+
+if __name__ == "__main__":  # python -m dnasim.cli: the signal handlers before anything else
+    from dnasim import entry as _entry
+
+    _entry.install()
+
+import os
 import traceback
 from pathlib import Path
 
 import click
+
+from dnasim.entry import Terminated as _Terminate
+from dnasim.entry import release as _release_signals
 
 EXIT_OK = 0
 EXIT_SIMULATION = 1
@@ -102,7 +111,8 @@ def _split_patterns(values) -> list[str]:
 
 @click.group(context_settings=CONTEXT_SETTINGS)
 @click.version_option(package_name="dnasim", prog_name="dnasim")
-def main():
+@click.pass_context
+def main(ctx):
     """dnasim: dynamic simulation of energy systems (plants of pipes, valves,
     attemperators and controllers), solved as index-1 DAEs by a Nordsieck BDF.
 
@@ -113,14 +123,13 @@ def main():
     Exit codes: 0 success, 1 simulation failed or interrupted (results up to
     that time are written), 2 bad input.
     """
+    # A signal held since the program started (dnasim.entry) is delivered now; `run`
+    # delivers it only after it has cleared its output directory.
+    if ctx.invoked_subcommand != "run":
+        _release_signals()
 
 
 # --------------------------------------------------------------------------- run
-
-
-class _Terminate(KeyboardInterrupt):
-    """Raised from the SIGTERM handler so the run stops like on Ctrl-C (the solver
-    then hands over what it computed, as for KeyboardInterrupt)."""
 
 
 def _on_sigterm(signum, frame):
@@ -129,7 +138,12 @@ def _on_sigterm(signum, frame):
 
 def _catch_sigterm():
     """Turn SIGTERM into ``_Terminate`` from now on; returns the old handler
-    (None when not in the main thread, e.g. inside a test runner thread)."""
+    (None when not in the main thread, e.g. inside a test runner thread, or when
+    ``dnasim.entry`` already installed its handlers: they raise the same)."""
+    from dnasim import entry
+
+    if entry.installed():
+        return None
     try:
         return signal.signal(signal.SIGTERM, _on_sigterm)
     except ValueError:
@@ -332,7 +346,10 @@ def _run(
 ):
     import math
 
-    _prepare_output(out)
+    try:
+        _prepare_output(out)
+    finally:
+        _release_signals()  # a signal held since the start: delivered now
     _coolprop_cache(coolprop_cache)
     loaded = _load(plant_file)
     sim = loaded.simulation
@@ -806,4 +823,4 @@ def linearize(plant_file, inputs, outputs, at, out_dir, all_states):
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    sys.exit(_entry.main())

@@ -70,4 +70,6 @@ def solve_mixed(dae, t0, y, yp, y_unknown, *, max_iter=60, what="initial state")
     except ResidualDomainError as err:  # pragma: no cover - solve_consistent catches these
         raise PlantError(f"{what}: outside the model's domain: {err}") from None
     except DAEError as err:
-        raise PlantError(str(err)) from None
+        out = PlantError(str(err))
+        out.state = getattr(err, "state", None)  # (y, yp) where Newton stopped
+        raise out from None

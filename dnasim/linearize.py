@@ -110,6 +110,7 @@ def _operating_point(system, sim, t):
         events=dae.events,
         tstops=dae.tstops(t0, float(t)),
         callback=keep,
+        throw=True,
     )
     return last["p"]
 

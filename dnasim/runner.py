@@ -19,19 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from dnasim.output import (
-    StreamingCSV,
-    clear_results,
-    column_header,
-    write_events_csv,
-    write_steps_csv,
-)
-
-#: last column of results.csv: 1 on the row of the state right after a discontinuity
-#: (the row before it, at the same time, holds the left limit)
-RESTART_COLUMN = "restart"
+from dnasim.output import clear_results, write_events_csv, write_steps_csv
+from dnasim.sinks import RESTART_COLUMN, CSVSink, OutputRows
 
 __all__ = [
     "RESTART_COLUMN",
@@ -262,8 +251,7 @@ def run_plant(
     t_start = time.perf_counter()
 
     state: dict[str, Any] = {
-        "writer": None,
-        "row": None,
+        "writer": None,  # the CSVSink of results.csv, opened at the first row
         "last_t": None,
         "prev_t": None,
         "steps": [],
@@ -275,27 +263,16 @@ def run_plant(
     # step size, kept (3 floats a step) for steps.csv in case the solver hands nothing over
     rows_are_steps = sim.output_interval is None
 
-    time_events = set(system.tstops(sim.t_start, sim.t_end))
+    rows = OutputRows(system, sim.t_start, sim.t_end)
 
-    def write(t, y, yp, restart):
+    def write(t, y, yp):
         try:
-            w = state["writer"]
-            if w is None:
-                names, units, row = plant_output_layout(system)
-                header = (
-                    [column_header("time", "s")]
-                    + [column_header(n, units.get(n)) for n in names]
-                    + [column_header(RESTART_COLUMN, "-")]
-                )
-                w = StreamingCSV(
-                    results_path, header, flush_rows=flush_rows, flush_seconds=flush_seconds
-                )
-                state["writer"], state["row"] = w, row
-            # the left limit at a time event: time functions (a set-point step) are
-            # evaluated just before it, as the state y is
-            t_row = math.nextafter(t, -math.inf) if not restart and t in time_events else t
-            values = state["row"](t_row, y, yp)
-            w.write_row(np.concatenate(([t], values, [float(restart)])))
+            sink = state["writer"]
+            if sink is None:  # results.csv appears with the first row, not before
+                sink = CSVSink(results_path, flush_rows=flush_rows, flush_seconds=flush_seconds)
+                sink.open(rows.names, rows.units)
+                state["writer"] = sink
+            sink.write(t, rows.row(t, y, yp))
         except OutputError as exc:
             state["output_error"] = exc
             # a DAEError stops the solver, which then hands over its partial result
@@ -307,8 +284,8 @@ def run_plant(
         state["prev_t"] = t
         bar.update(t)
 
-    def callback(t, y, yp):  # a repeated time is the state after a restart
-        write(t, y, yp, int(state["prev_t"] is not None and float(t) == state["prev_t"]))
+    def callback(t, y, yp):
+        write(t, y, yp)
 
     status, message, result = "finished", "", None
     try:
@@ -396,7 +373,7 @@ def run_plant(
         message=message,
         t_end=sim.t_end,
         t_reached=state["last_t"],
-        rows=state["writer"].rows_written if state["writer"] is not None else 0,
+        rows=state["writer"].rows if state["writer"] is not None else 0,
         out_dir=out,
         files=files,
         stats=stats,

@@ -15,7 +15,9 @@ Contracts
   arrays. It never sees components or the System.
 * A sink is an object with ``open(names, units)``, ``write(t, row)`` and
   ``close()``; ``simulate`` streams every output point (t [s], the row of
-  ``System.output_row``) into every sink while the solver runs.
+  ``System.output_row`` and the restart flag: ``dnasim.sinks.OutputRows``) into
+  every sink while the solver runs. ``dnasim run`` writes its results.csv
+  through the same ``CSVSink`` and rows.
 * Tolerances: ``rtol`` is relative; ``atol_scaled`` is an absolute tolerance
   relative to each variable's scale, atol_i = atol_scaled * max(nominal_i,
   |y0_i|) (``System.atol_vector``), so a pressure ~1e5 Pa gets 1e5 times the
@@ -24,7 +26,8 @@ Contracts
   with no scales; its ``atol`` is the absolute atol_i itself.)
 * Failures: a solver failure ends the run with ``Results.success`` False and the
   reason in ``message``; ``throw=True`` raises ``DAEError`` with the Results as
-  ``err.result``. A plant that cannot start (no consistent initial values)
+  ``err.result``. ``dnasim.solve_dae`` has the same ``throw`` with the same
+  default. A plant that cannot start (no consistent initial values)
   raises ``DAEError`` (there are no rows to return).
 """
 
@@ -38,7 +41,7 @@ import numpy as np
 from dnasim.backends import IDA, NordsieckBDF, Problem
 from dnasim.errors import DAEError, PlantError
 from dnasim.results import Results, strictly_increasing
-from dnasim.sinks import CSVSink
+from dnasim.sinks import CSVSink, OutputRows
 
 __all__ = ["CSVSink", "IDA", "NordsieckBDF", "simulate", "simulation_keywords"]
 
@@ -104,14 +107,14 @@ def simulate(
     t_init = time.perf_counter() - t_start
 
     sinks = list(sinks)
+    rows = OutputRows(system, t0, t_end)
     if sinks:
-        names, units = system.output_names(), system.output_units()
         for s in sinks:
-            s.open(names, units)
+            s.open(rows.names, rows.units)
 
     def point(t, y, yp):
         if sinks:
-            row = system.output_row(t, y, yp)
+            row = rows.row(t, y, yp)
             for s in sinks:
                 s.write(t, row)
         if callback is not None:

@@ -179,6 +179,8 @@ class System:
             comp.input_units = {}
         for (dname, inp), src in sources.items():
             plant.components[dname].input_units[inp] = src.unit
+        for comp in plant.components.values():  # "0.5 1/K" from Python, now that 1/K is known
+            comp.resolve_signal_units(comp.input_units.values())
         names, units, nominal, owner, accumulator = [], [], [], [], []
         self.node_index = {}
         for node in plant.node_names():

@@ -478,3 +478,213 @@ def test_check_evaluates_the_prescribed_states(tmp_path, old, new, words):
     assert "internal error" not in result.output and "Traceback" not in result.output
     for w in words:
         assert w in result.output, (w, result.output)
+
+
+# --------------------------------------------------------------------------- 8. back-pressure
+
+
+def test_back_pressure_below_the_fluid_range_is_located(tmp_path):
+    # 0.001 bar = 100 Pa is below IF97's lowest pressure, p_sat(273.15 K) = 611.2 Pa:
+    # no state of the steam leaving through the sink exists, whatever its enthalpy
+    text = ATT.replace('p = "100 bar"', 'p = "0.001 bar"')
+    res = invoke("check", plant(tmp_path, text))
+    assert_located(res, "boundary 'turbine'", "0.001 bar", "outside the range of Water (IF97)")
+
+
+def test_steady_start_without_a_steady_state_names_the_cause():
+    # 0.01 bar is inside IF97's range, but the turbine valve (m = C z sqrt(dp), no
+    # choking) then passes 2.6 times its nominal flow, and the spray controller would
+    # need an opening above 1 to hold its set point: no steady state exists
+    import dnasim
+    from dnasim.errors import PlantError
+    from dnasim.start import initial_values
+
+    spec = dnasim.load_plant(PLANTS / "attemperator.toml")
+    spec.components["turbine"].params["p"] = 1000.0  # [Pa] = 0.01 bar
+    system = dnasim.compile(spec)
+    with pytest.raises(PlantError) as info:
+        initial_values(system, 0.0, "steady")
+    msg = str(info.value)
+    assert msg.index("component 'pi' (PIController)") < msg.index("The solver's report")
+    for words in ("'free' -> 'high'", "pi.z = 1.07", "'turbine_valve'", "choked"):
+        assert words in msg, (words, msg)
+
+
+# --------------------------------------------------------------------------- 10. early signals
+
+
+def _catches_sigterm(pid: int) -> bool:
+    """The process has a handler for SIGTERM (bit 15 of SigCgt in /proc/PID/status)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    line = next((s for s in status.splitlines() if s.startswith("SigCgt:")), "SigCgt: 0")
+    return bool(int(line.split()[1], 16) & (1 << (signal.SIGTERM - 1)))
+
+
+def _start_run(out: Path, block: bool):
+    """`python -m dnasim run` on the attemperator into ``out``, which holds a previous
+    run's results. block: SIGTERM and SIGINT blocked across exec, so a signal sent
+    at once stays pending through the interpreter's own start-up (before any line
+    of dnasim runs, where no Python program can catch it) until dnasim's handlers
+    are installed and unblock it."""
+    out.mkdir()
+    for name in RESULT_FILES:
+        (out / name).write_text("stale\n")
+
+    def child():
+        for s in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(s, signal.SIG_DFL)
+        if block:
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM, signal.SIGINT})
+
+    return subprocess.Popen(
+        [sys.executable, "-m", "dnasim", "run", str(PLANTS / "attemperator.toml")]
+        + ["-o", str(out), "-q"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        preexec_fn=child,
+    )
+
+
+def _assert_interrupted_cleanly(proc, out: Path, what: str):
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, (proc.returncode, err)
+    assert len(err.strip().splitlines()) == 1, err  # one line, no traceback
+    assert "interrupted" in err and what in err, err
+    for f in out.iterdir():  # nothing of the previous run; whole rows only
+        text = f.read_text()
+        assert "stale" not in text, f
+        assert text == "" or text.endswith("\n"), f
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_a_signal_at_the_very_start_is_held_until_the_handlers_exist(tmp_path, sig):
+    proc = _start_run(tmp_path / "out", block=True)
+    proc.send_signal(sig)
+    _assert_interrupted_cleanly(
+        proc, tmp_path / "out", "SIGTERM" if sig == signal.SIGTERM else "Ctrl-C"
+    )
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc/PID/status")
+@pytest.mark.parametrize("delay", [0.0, 0.02, 0.1, 0.3, 1.0])
+def test_sigterm_at_any_early_time_gives_one_line_and_no_stale_files(tmp_path, delay):
+    # from the moment the handler exists (polled in /proc, so a loaded machine's slow
+    # interpreter start does not matter) through imports, option parsing, clearing
+    # the output directory, loading the plant and the steady start
+    proc = _start_run(tmp_path / "out", block=False)
+    deadline = time.monotonic() + 60
+    while not _catches_sigterm(proc.pid) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.001)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGTERM)
+    _assert_interrupted_cleanly(proc, tmp_path / "out", "SIGTERM")
+
+
+# --------------------------------------------------------------------------- 3. gains from Python
+
+
+def _attemperator_with_pi(**params):
+    """The attemperator plant built from Python, its controller given ``params``."""
+    import dnasim
+    from dnasim.components.controller import PIController
+    from dnasim.plant import Plant
+
+    ref = dnasim.load_plant(PLANTS / "attemperator.toml")
+    plant = Plant("att", medium="Water")
+    for c in ref.components.values():
+        plant.add(PIController("pi", **params) if c.name == "pi" else c)
+    for (c, port), node in ref.connections.items():
+        plant.connect(f"{c}.{port}", node)
+    for (c, inp), (s, out) in ref.links.items():
+        plant.link(f"{s}.{out}", f"{c}.{inp}")
+    return ref, plant
+
+
+def test_controller_units_from_python_are_read_as_from_a_plant_file():
+    import dnasim
+
+    ref, plant = _attemperator_with_pi(
+        Kp="0.02 1/K", KI="6e-4 1/(K.s)", setpoint="450 degC", measured_nominal="700 K"
+    )
+    pi = dnasim.compile(plant).components["pi"]
+    for k in ("Kp", "KI", "measured_nominal"):  # the file gives the same in these units
+        assert pi.params[k] == ref.components["pi"].params[k], k
+    assert pi.param_at("setpoint", 0.0) == 723.15  # 450 degC
+
+
+@pytest.mark.parametrize(
+    "value, words",
+    [
+        ("0.02 degC", "absolute temperature"),
+        ("0.02 K", "dimension of temperature"),
+        ("2 %/bar", "1/temperature is expected"),
+    ],
+)
+def test_controller_gain_from_python_refuses_what_a_plant_file_refuses(value, words):
+    import dnasim
+
+    _, plant = _attemperator_with_pi(Kp=value, setpoint=723.15)
+    with pytest.raises(dnasim.PlantError, match="component 'pi'") as info:
+        dnasim.compile(plant)
+    assert "'Kp'" in str(info.value) and words in str(info.value)
+
+
+def test_controller_gain_per_bar_from_python_for_a_pressure_signal():
+    import dnasim
+    from dnasim.components.base import Component, Equation, SignalPort, Variable
+    from dnasim.components.controller import PIController
+    from dnasim.plant import Plant
+
+    class PressureSignal(Component):
+        """A constant pressure signal p = 1e5 Pa (test only)."""
+
+        REGISTER = False
+        USES_MEDIUM = False
+        SIGNAL_OUTPUTS = (SignalPort("p", "Pa", "pressure", variable="p"),)
+
+        def variables(self):
+            return [Variable("p", "Pa", 1e5)]
+
+        def equations(self):
+            return [Equation("p", y=("p",), residual=lambda t, x, xp: x["p"] - 1e5)]
+
+    plant = Plant("signals")
+    plant.add(PressureSignal("src"))
+    plant.add(PIController("pi", Kp="2 %/bar", setpoint="1 bar", measured_nominal="1 bar"))
+    plant.link("src.p", "pi.measured")
+    pi = dnasim.compile(plant).components["pi"]
+    # 2 % per bar = 0.02 / 1e5 Pa (relative 1e-12: the unit conversion's rounding)
+    assert pi.params["Kp"] == pytest.approx(2e-7, rel=1e-12)
+    assert pi.param_at("setpoint", 0.0) == pytest.approx(1e5, rel=1e-12)
+
+
+def test_cli_results_are_the_csv_sink_of_simulate(tmp_path):
+    # one writer (issue 8): `dnasim run` streams through CSVSink and the same rows as
+    # simulate(sinks=[CSVSink]); over the set-point step at 2 min (a time event: a left
+    # limit and a restart row) the two files are identical, byte for byte
+    import dnasim
+    from dnasim.plantfile import load
+    from dnasim.simulation import CSVSink, simulate, simulation_keywords
+
+    loaded = load(PLANTS / "attemperator.toml")
+    loaded.simulation.t_end = 150.0
+    api = tmp_path / "api.csv"
+    simulate(
+        dnasim.compile(loaded.plant),
+        t_end=150.0,
+        sinks=[CSVSink(api)],
+        **simulation_keywords(loaded.simulation),
+    )
+    res = invoke(
+        "run", PLANTS / "attemperator.toml", "-o", tmp_path / "cli", "-q", "--t-end", "150 s"
+    )
+    assert res.exit_code == 0, res.output
+    cli = (tmp_path / "cli" / "results.csv").read_text()
+    assert cli == api.read_text()
+    restart = read_results_csv(tmp_path / "cli" / "results.csv")[2]["restart"]
+    assert restart.sum() >= 1  # the step at 120 s

@@ -207,3 +207,28 @@ def test_hx_plant_runs_and_balances():
     assert math.isclose(Q_hot, Q_cold, rel_tol=1e-6)
     assert res["h2.T"][-1] < 360.0 and res["c8.T"][-1] > 290.0
     assert abs(res["sensor.T_s"][-1] - res["h2.T"][-1]) < 1e-6
+
+
+@pytest.mark.parametrize(
+    "cls, params",
+    [
+        (Mixer, dict(n_inlets=3)),
+        (Splitter, dict(n_outlets=2)),
+        (PressureBoundary, dict(p=1e5, T=300.0)),
+        (PressureBoundary, dict(p=1e5)),
+        (MassFlowBoundary, dict(m=1.0, h=1e5)),
+        (MassFlowBoundary, dict(m=-1.0)),
+    ]
+    + [(REGISTRY["Attemperator"], dict(V=0.3, k=4000.0))],
+    ids=["Mixer", "Splitter", "PB-T", "PB-sink", "MFB-h", "MFB-sink"] + ["Attemperator"],
+)
+def test_equations_are_declared_once(cls, params):
+    # issue 8: name, dependencies, doc and residual sit together in one Equation; the
+    # residual is the base class's, derived from that list (it cannot drift from the
+    # docs or the sparsity, which test_declared_pattern_covers_probed checks)
+    from dnasim.components.base import Component
+
+    comp = cls("c", **params)
+    eqs = comp.equations()
+    assert eqs and all(e.residual is not None and e.doc and e.unit for e in eqs)
+    assert type(comp).residual is Component.residual

@@ -49,12 +49,16 @@ def test_exception_in_a_user_callback_is_wrapped_with_the_partial_result(where):
     else:
         kwargs["callback"] = _raises_after(0.5)
     with pytest.raises(DAEError) as info:
-        solve_dae(residual, (0, 3), [1.0], rtol=1e-6, **kwargs)
+        solve_dae(residual, (0, 3), [1.0], rtol=1e-6, throw=True, **kwargs)
     err = info.value
     assert isinstance(err.__cause__, Boom)  # the original, chained
     assert "Boom" in str(err) and "user code failed" in str(err)
     partial = err.result
     assert not partial.success and partial.t.size >= 1 and partial.t[-1] <= 3.0
+    # throw=False (the default, as simulate's): the same failure, returned
+    res = solve_dae(residual, (0, 3), [1.0], rtol=1e-6, **kwargs)
+    assert not res.success and res.status == -1 and res.message == str(err)
+    np.testing.assert_array_equal(res.t, partial.t)
 
 
 def test_residual_returning_strings_is_named():
@@ -69,7 +73,7 @@ def test_action_returning_the_wrong_shape_is_named():
     g.name = "half"
     g.action = lambda t, y, yp: (np.zeros(3), np.zeros(3))
     with pytest.raises(DAEError, match=r"action of switch 'half'.*shape \(1,\)"):
-        solve_dae(decay, (0, 1), [1.0], events=[g])
+        solve_dae(decay, (0, 1), [1.0], events=[g], throw=True)
 
 
 @pytest.mark.parametrize(
@@ -121,3 +125,29 @@ def test_stiff_damped_oscillator_over_100_seconds():
     assert res.success and res.t[-1] == 100.0
     # |x(100)| = exp(-500) ~ 0: what is left is the solver's noise, a few atol at most.
     assert abs(res.y[0, -1]) < 1e-5
+
+
+def test_failures_are_reported_alike_by_solve_dae_and_simulate():
+    # one contract (issue 8): success False by default, DAEError with .result on
+    # throw=True; the default is the same in both
+    import inspect
+
+    from dnasim.simulation import simulate
+
+    for f in (solve_dae, simulate):
+        assert inspect.signature(f).parameters["throw"].default is False
+    res = solve_dae(decay, (0, 1e6), [1.0], max_steps=5)
+    assert not res.success and res.status == -1 and "5 steps" in res.message
+    assert res.t.size >= 1  # the solution up to the last accepted step
+    with pytest.raises(DAEError, match="5 steps") as info:
+        solve_dae(decay, (0, 1e6), [1.0], max_steps=5, throw=True)
+    assert not info.value.result.success
+
+
+def test_inconsistent_initial_values_raise_whatever_throw_says():
+    # no solution to return (simulate raises for a plant that cannot start, too)
+    def residual(t, y, yp):
+        return np.array([yp[0] + y[0], y[1] ** 2 + 1.0])  # y1^2 = -1 has no solution
+
+    with pytest.raises(DAEError, match="initial values"):
+        solve_dae(residual, (0, 1), [1.0, 0.0], algebraic=[1], throw=False)

@@ -45,7 +45,7 @@ def test_residual_returning_nan_fails_with_time_and_component():
         return f
 
     with pytest.raises(DAEError) as info:
-        solve_dae(residual, (0, 1), [1.0, 1.0], rtol=1e-6, variable_names=["a", "b"])
+        solve_dae(residual, (0, 1), [1.0, 1.0], rtol=1e-6, variable_names=["a", "b"], throw=True)
     message = str(info.value)
     assert "NaN" in message and "equation(s) 1" in message
     assert "t = 0.5" in message  # stopped at the last good time, just before 0.5+
@@ -86,6 +86,7 @@ def test_singular_iteration_matrix_names_the_variable():
             algebraic=[1],
             calc_initial=False,
             variable_names=["level", "flow"],
+            throw=True,
         )
     message = str(info.value)
     assert "singular" in message and "flow" in message

@@ -112,4 +112,4 @@ def test_vector_switch_of_the_wrong_shape_is_named():
     g.names = ["a", "b", "c"]
     g.name = "levels"
     with pytest.raises(DAEError, match=r"'levels' returned shape \(2,\).*shape \(3,\)"):
-        solve_dae(lambda t, y, yp: yp + y, (0, 1), [1.0], events=[g])
+        solve_dae(lambda t, y, yp: yp + y, (0, 1), [1.0], events=[g], throw=True)

@@ -99,49 +99,93 @@ class Attemperator(Component):
         ]
 
     def equations(self):
+        """The equations of the class doc, each with its dependencies and residual."""
         flows = ("m_steam", "m_water", "m_out")
+        V = self.params["V"]
         return [
-            Equation("mass", y=flows, yp=("M",)),
+            Equation(
+                "mass",
+                y=flows,
+                yp=("M",),
+                unit="kg/s",
+                doc="dM/dt = m_steam + m_water - m_out",
+                residual=lambda t, x, xp: xp["M"] - (x["m_steam"] + x["m_water"] - x["m_out"]),
+            ),
             Equation(
                 "energy",
                 y=flows + ("steam_in.h", "water_in.h", "outlet.h", "h_v"),
                 yp=("U",),
+                unit="W",
+                doc="dU/dt = E_in(m_steam) + E_in(m_water) + E_in(-m_out)",
+                residual=lambda t, x, xp: xp["U"] - self._energy_in(x),
             ),
-            Equation("density", y=("M", "p_v", "h_v")),
-            Equation("internal_energy", y=("U", "M", "p_v", "h_v")),
-            Equation("steam_friction", y=("steam_in.p", "steam_in.h", "p_v", "h_v", "m_steam")),
-            Equation("water_pressure", y=("water_in.p", "p_v")),
-            Equation("outlet_pressure", y=("outlet.p", "p_v")),
-            Equation("temperature", y=("T", "p_v", "h_v")),
+            Equation(
+                "density",
+                y=("M", "p_v", "h_v"),
+                unit="kg",
+                doc="M = V rho(p_v, h_v)",
+                residual=lambda t, x, xp: x["M"] - V * self._states(x)[1][1],
+            ),
+            Equation(
+                "internal_energy",
+                y=("U", "M", "p_v", "h_v"),
+                unit="J",
+                doc="U = M u(p_v, h_v)",
+                residual=lambda t, x, xp: x["U"] - x["M"] * self._states(x)[2][1],
+            ),
+            Equation(
+                "steam_friction",
+                y=("steam_in.p", "steam_in.h", "p_v", "h_v", "m_steam"),
+                unit="Pa",
+                doc="p_steam - p_v = k m_steam sqrt(m_steam^2 + m_reg^2) / rho_f",
+                residual=self._steam_friction,
+            ),
+            Equation(
+                "water_pressure",
+                y=("water_in.p", "p_v"),
+                unit="Pa",
+                doc="p_water = p_v",
+                residual=lambda t, x, xp: x["water_in.p"] - x["p_v"],
+            ),
+            Equation(
+                "outlet_pressure",
+                y=("outlet.p", "p_v"),
+                unit="Pa",
+                doc="p_out = p_v",
+                residual=lambda t, x, xp: x["outlet.p"] - x["p_v"],
+            ),
+            Equation(
+                "temperature",
+                y=("T", "p_v", "h_v"),
+                unit="K",
+                doc="T = T(p_v, h_v)",
+                residual=lambda t, x, xp: x["T"] - self._states(x)[0][1],
+            ),
         ]
 
-    def residual(self, t, x, xp):
-        T, rho, u = self._props(
+    def _states(self, x):
+        """(T, rho, u) at the steam node [0] and in the volume [1]; ``PropertyArrays``
+        calls the medium only for points that changed, so the equations that share
+        them cost one property evaluation per residual."""
+        return self._props(
             self.medium,
             np.array([x["steam_in.p"], x["p_v"]]),
             np.array([x["steam_in.h"], x["h_v"]]),
         )
-        ms, mw, mo = x["m_steam"], x["m_water"], x["m_out"]
-        hv = x["h_v"]
-        eps = self.m_eps
-        E = (
-            energy_in(ms, x["steam_in.h"], hv, eps)
-            + energy_in(mw, x["water_in.h"], hv, eps)
-            + energy_in(-mo, x["outlet.h"], hv, eps)
+
+    def _energy_in(self, x):
+        hv, eps = x["h_v"], self.m_eps
+        return (
+            energy_in(x["m_steam"], x["steam_in.h"], hv, eps)
+            + energy_in(x["m_water"], x["water_in.h"], hv, eps)
+            + energy_in(-x["m_out"], x["outlet.h"], hv, eps)
         )
-        rho_f = upwind_mean(ms, rho[0], rho[1], eps)
-        return np.array(
-            [
-                xp["M"] - (ms + mw - mo),
-                xp["U"] - E,
-                x["M"] - self.params["V"] * rho[1],
-                x["U"] - x["M"] * u[1],
-                x["steam_in.p"] - x["p_v"] - friction_dp(self.params["k"], ms, rho_f, self.m_reg),
-                x["water_in.p"] - x["p_v"],
-                x["outlet.p"] - x["p_v"],
-                x["T"] - T[1],
-            ]
-        )
+
+    def _steam_friction(self, t, x, xp):
+        rho = self._states(x)[1]
+        ms = x["m_steam"]
+        rho_f = upwind_mean(ms, rho[0], rho[1], self.m_eps)
+        return x["steam_in.p"] - x["p_v"] - friction_dp(self.params["k"], ms, rho_f, self.m_reg)
 
     def guess_nodes(self, t0):
         P = self.params

@@ -157,6 +157,15 @@ class Param:
         return convert_quantity(value, unit, difference)
 
 
+def _has_unit_text(value) -> bool:
+    """A unit string, or a time function (dict) with one among its values."""
+    if isinstance(value, str):
+        return True
+    return isinstance(value, dict) and any(
+        isinstance(v, str) for k, v in value.items() if k != "type"
+    )
+
+
 #: units whose quantities must be > 0 (absolute temperature, pressure, ...)
 POSITIVE_UNITS = {"Pa": "pressure", "m3": "volume", "m2": "area", "kg": "mass", "K": "temperature"}
 
@@ -427,6 +436,9 @@ class Component:
                 f"known: {', '.join(known) or 'none'}"
             )
         self.params: dict[str, object] = {}
+        #: parameters in the unit of a linked signal given with a unit ("0.5 1/K",
+        #: "440 degC"): converted by ``resolve_signal_units`` once the link is known
+        self.signal_unit_values: dict[str, object] = {}
         for p in self.PARAMS:
             value = params.get(p.name, p.default)
             if value is REQUIRED:
@@ -434,6 +446,10 @@ class Component:
                     f"component '{name}' ({type(self).__name__}): parameter '{p.name}' [{p.unit}] "
                     "is required" + (f" ({p.doc})" if p.doc else "")
                 )
+            if p.per_signal and _has_unit_text(value):
+                self.signal_unit_values[p.name] = value
+                self.params[p.name] = None
+                continue
             self.params[p.name] = self._validate(p, value)
         self.medium = None  # set by dnasim.compiler (dnasim.media medium object)
         self.medium_name = self.params.get("medium")
@@ -505,6 +521,28 @@ class Component:
             return f
         v = _check_number(self.name, p, value)
         return as_time_function(v) if p.time_function else v
+
+    def resolve_signal_units(self, signal_units) -> None:
+        """Convert the parameters given with a unit whose SI unit depends on the linked
+        signal (``Param.per_signal``: a controller's gain "0.5 1/K" or "2 %/bar", its
+        set point "440 degC"), now that ``signal_units`` (the units of the signals
+        linked into this component) are known. The same conversion and checks as a
+        plant file's (``dnasim.plantfile``): "0.02 degC" for a gain is refused.
+        Raises PlantError naming the component and the parameter."""
+        if not self.signal_unit_values:
+            return
+        from dnasim.plantfile import _param_value
+        from dnasim.spec import Problems
+
+        known = {p.name: p for p in self.PARAMS}
+        errors = Problems(f"component '{self.name}' ({type(self).__name__})")
+        for name, raw in self.signal_unit_values.items():
+            p = known[name]
+            x = _param_value(raw, p, errors, (), name, list(signal_units), type(self))
+            if x is not None:
+                self.params[name] = self._validate(p, x)
+        errors.raise_if_any()
+        self.signal_unit_values = {}
 
     def setup(self):
         """Hook: check parameter combinations, precompute derived constants."""

@@ -191,10 +191,22 @@ class _Boundary(Component):
         return f"{where}: cannot evaluate the supply enthalpy at {state}{reason}"
 
     def supply_equations(self, p_dep):
+        """The supply equation (none for a sink only): h_supply = h(t), h(p, T(t)) or
+        h_px(p, x(t)) [J/kg], at the boundary's pressure (``supply_pressure``)."""
         if not self.has_supply:
             return []
         dep = ("h_supply",) if self.supply_by == "h" else ("h_supply",) + p_dep
-        return [Equation("supply", y=dep, doc="h_supply = h, h(p, T) or h_px(p, x)")]
+        return [
+            Equation(
+                "supply",
+                y=dep,
+                unit="J/kg",
+                doc="h_supply = h, h(p, T) or h_px(p, x)",
+                residual=lambda t, x, xp: (
+                    x["h_supply"] - self.supply_h(t, self.supply_pressure(t, x))
+                ),
+            )
+        ]
 
     def energy_flow(self, x):
         """E [W] into the plant (see the module doc)."""
@@ -206,12 +218,23 @@ class _Boundary(Component):
     def accumulator_equations(self):
         dep = ("m", "port.h") + (("h_supply",) if self.has_supply else ())
         return [
-            Equation("mass_passed", y=("m",), yp=("M_passed",), doc="dM_passed/dt = m"),
-            Equation("energy_passed", y=dep, yp=("H_passed",), doc="dH_passed/dt = E"),
+            Equation(
+                "mass_passed",
+                y=("m",),
+                yp=("M_passed",),
+                unit="kg/s",
+                doc="dM_passed/dt = m",
+                residual=lambda t, x, xp: xp["M_passed"] - x["m"],
+            ),
+            Equation(
+                "energy_passed",
+                y=dep,
+                yp=("H_passed",),
+                unit="W",
+                doc="dH_passed/dt = E = w(m) h_supply - w(-m) h_node",
+                residual=lambda t, x, xp: xp["H_passed"] - self.energy_flow(x),
+            ),
         ]
-
-    def accumulator_residuals(self, x, xp):
-        return [xp["M_passed"] - x["m"], xp["H_passed"] - self.energy_flow(x)]
 
     def switches(self):
         if self.supply_by == "T" and is_condensable(self.medium):
@@ -306,22 +329,49 @@ class PressureBoundary(_Boundary):
 
     def equations(self):
         return (
-            [Equation("pressure", y=("port.p",))]
+            [
+                Equation(
+                    "pressure",
+                    y=("port.p",),
+                    unit="Pa",
+                    doc="p_node = p(t)",
+                    residual=lambda t, x, xp: x["port.p"] - self.param_at("p", t),
+                )
+            ]
             + self.supply_equations(())
             + self.accumulator_equations()
         )
 
-    def residual(self, t, x, xp):
-        r = [x["port.p"] - self.param_at("p", t)]
-        if self.has_supply:
-            r.append(x["h_supply"] - self.supply_h(t, self.param_at("p", t)))
-        return np.array(r + self.accumulator_residuals(x, xp))
-
     def guess_nodes(self, t0):
         p = self.param_at("p", t0)
         if not self.has_supply:
+            self._check_sink_pressure(t0, p)
             return {"port": (p, None)}
         return {"port": (p, self.supply_h(t0, p))}
+
+    #: temperatures [K] at which a sink's pressure is tried in its medium: a pressure
+    #: that none of them accepts is outside the medium's range for any state
+    PROBE_T = (300.0, 600.0, 1000.0)
+
+    def _check_sink_pressure(self, t, p):
+        """Raise BoundaryStateError when no state at pressure p [Pa] exists in the
+        medium (e.g. 0.001 bar for IF97 water, whose range starts at 611.2 Pa): the
+        fluid leaving the plant there could never be evaluated."""
+        medium = getattr(self, "medium", None)
+        if medium is None:
+            return
+        first = None
+        for T in self.PROBE_T:
+            try:
+                medium.h_pT(p, T)
+                return
+            except PropertyError as exc:
+                first = first or exc
+        raise BoundaryStateError(
+            f"boundary '{self.name}' ({type(self).__name__}) at t = {t:.6g} s: the pressure "
+            f"p = {p / 1e5:.6g} bar ({p:.6g} Pa) is outside the range of {medium.label}: no "
+            f"state of the fluid leaving the plant there can be evaluated ({first})"
+        )
 
     def initial_guess(self, t0, x):
         x["m"] = self.flow_guess()
@@ -354,16 +404,18 @@ class MassFlowBoundary(_Boundary):
 
     def equations(self):
         return (
-            [Equation("flow", y=("m",))]
+            [
+                Equation(
+                    "flow",
+                    y=("m",),
+                    unit="kg/s",
+                    doc="m = m(t)",
+                    residual=lambda t, x, xp: x["m"] - self.param_at("m", t),
+                )
+            ]
             + self.supply_equations(("port.p",))
             + self.accumulator_equations()
         )
-
-    def residual(self, t, x, xp):
-        r = [x["m"] - self.param_at("m", t)]
-        if self.has_supply:
-            r.append(x["h_supply"] - self.supply_h(t, x["port.p"]))
-        return np.array(r + self.accumulator_residuals(x, xp))
 
     def guess_nodes(self, t0):
         if not self.has_supply or self.params["h"] is None:

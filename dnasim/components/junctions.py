@@ -37,21 +37,43 @@ class _Junction(Component):
         raise NotImplementedError
 
     def equations(self):
+        """The equations of the module doc, each with its dependencies and residual."""
         ports = self.port_names()
         flows = tuple(self.flow_names())
         hs = tuple(f"{p}.h" for p in ports)
-        eqs = [Equation("mass", y=flows), Equation("mixing", y=flows + hs + ("h_mix",))]
         last = ports[-1]
-        eqs += [Equation(f"pressure_{p}", y=(f"{p}.p", f"{last}.p")) for p in ports[:-1]]
+        eqs = [
+            Equation(
+                "mass",
+                y=flows,
+                unit="kg/s",
+                doc="sum_k m_k = 0 (m_k into the junction)",
+                residual=lambda t, x, xp: self.flows_in(x).sum(),
+            ),
+            Equation(
+                "mixing",
+                y=flows + hs + ("h_mix",),
+                unit="W",
+                doc="sum_k w(m_k) (h_k - h_mix) = 0",
+                residual=self._mixing,
+            ),
+        ]
+        eqs += [
+            Equation(
+                f"pressure_{p}",
+                y=(f"{p}.p", f"{last}.p"),
+                unit="Pa",
+                doc=f"p_{p} = p_{last}",
+                residual=lambda t, x, xp, a=f"{p}.p", b=f"{last}.p": x[a] - x[b],
+            )
+            for p in ports[:-1]
+        ]
         return eqs
 
-    def residual(self, t, x, xp):
-        ports = self.port_names()
+    def _mixing(self, t, x, xp):
         m = self.flows_in(x)
-        h = np.array([x[f"{p}.h"] for p in ports])
-        p = np.array([x[f"{q}.p"] for q in ports])
-        w = upwind_weight(m, self.m_eps)
-        return np.concatenate(([m.sum(), np.dot(w, h - x["h_mix"])], p[:-1] - p[-1]))
+        h = np.array([x[f"{p}.h"] for p in self.port_names()])
+        return np.dot(upwind_weight(m, self.m_eps), h - x["h_mix"])
 
     def initial_guess(self, t0, x):
         ports = self.port_names()

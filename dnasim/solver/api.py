@@ -61,6 +61,7 @@ def solve_dae(
     max_steps: int = 500_000,
     output_interval: float | None = None,
     keep_output: bool = True,
+    throw: bool = False,
 ) -> DAEResult:
     """Solve the index-1 DAE F(t, y, y') = 0 from t_span[0] to t_span[1].
 
@@ -110,10 +111,21 @@ def solve_dae(
     keep_output : False: output points go to ``callback`` only and are not kept
         in the result (``result.t`` is then empty): memory does not grow with them.
 
+    throw : what a failure during the integration does (a step that fails
+        repeatedly, max_steps, a chattering switch, an exception in a callback,
+        the event functions or an action). False (the default, as in
+        ``dnasim.simulate``): return the result with ``success`` False, ``status``
+        -1 and the reason in ``message``, holding the solution up to the last
+        accepted step. True: raise ``DAEError`` with that result as its ``result``
+        attribute (the original exception chained).
+
     Returns
     -------
-    DAEResult. On a failure during integration, raises ``DAEError`` whose
-    ``result`` attribute holds the solution up to the last accepted step.
+    DAEResult (``success`` False after a failure during the integration, see
+    ``throw``). Invalid input, and initial values that cannot be made consistent,
+    raise ``DAEError`` whatever ``throw`` says: there is no solution to return
+    (as ``simulate`` raises for a plant that cannot start). Ctrl-C raises
+    ``KeyboardInterrupt`` with the solution so far as its ``result`` attribute.
     """
     problem = _Problem.validate(
         residual,
@@ -354,6 +366,8 @@ def solve_dae(
                 g_old = [sw.value(solver.t, y_new, yp_new) for sw in switches]
     except DAEError as exc:
         result = partial_result(False, -1, str(exc))
+        if not throw and solver is not None:  # the integration had started
+            return result
         error = DAEError(str(exc))
         error.result = result
         raise error from exc.__cause__

@@ -170,19 +170,21 @@ def solve_consistent(
             )
             if ok:
                 return y, yp
-            failures.append((problem, f, scaled, uw))
+            failures.append((problem, f, scaled, uw, y, yp))
         # report the attempt that came closer
-        problem, f, scaled, uw = min(
+        problem, f, scaled, uw, y, yp = min(
             failures, key=lambda c: np.inf if c[2] is None else float(np.max(c[2], initial=0.0))
         )
         detail = _worst(f, scaled, uw, matrix, equation_names, variable_names)
     finally:
         matrix.matrix = None  # the integrator must build its own iteration matrix
-    raise DAEError(
+    err = DAEError(
         _message(
             t, what, f"they are inconsistent and could not be made consistent ({problem})", detail
         )
     )
+    err.state = (y, yp)  # the last Newton iterate, for the caller's diagnosis
+    raise err
 
 
 def _newton(
@@ -221,7 +223,7 @@ def _newton(
         try:
             matrix.factorize()
         except SingularMatrixError as exc:
-            raise DAEError(
+            err = DAEError(
                 _message(
                     t,
                     what,
@@ -230,7 +232,9 @@ def _newton(
                     "are algebraic (their derivatives appear nowhere), pass them as "
                     "`algebraic`",
                 )
-            ) from None
+            )
+            err.state = (y, yp)  # where it failed, for the caller's diagnosis
+            raise err from None
         scaled = _scaled_residuals(jac, f, uw)
         d = matrix.solve(-f)
         dw = d * uw

@@ -1,0 +1,120 @@
+"""The ``dnasim`` program's entry point: the signal handlers first, then the command line.
+
+SIGTERM and SIGINT (Ctrl-C) are caught before anything heavy is imported (this
+module imports only ``os``, ``signal`` and ``sys``), so that a signal at any time
+gives one line on stderr and exit code 1, never a silent -15 or a traceback.
+
+Until a command is ready to be interrupted, a signal is *held*: it is recorded and
+delivered by :func:`release`. ``dnasim run`` releases it only after it has removed
+the previous run's results from its output directory, so an interrupted start never
+leaves an older results.csv behind that looks like the new run's. Every other
+command releases at once (in the group callback). After the release a signal
+raises :class:`Terminated` (SIGTERM) or ``KeyboardInterrupt`` (SIGINT) where the
+program is; the commands turn either into one message.
+
+The handlers also unblock SIGTERM and SIGINT, so a signal sent while the parent
+kept them blocked (and so pending before Python started) is delivered here.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+
+EXIT_INTERRUPTED = 1  # the command line's "simulation failed or interrupted"
+
+_SIGNALS = (signal.SIGTERM, signal.SIGINT)
+_state = {"holding": False, "pending": None, "installed": False}
+
+
+class Terminated(KeyboardInterrupt):
+    """Raised for SIGTERM, so that a run stops as on Ctrl-C (the solver hands over
+    what it computed, as for KeyboardInterrupt)."""
+
+
+def signal_name(exc: BaseException | int | None) -> str:
+    """ "SIGTERM" or "Ctrl-C" for an exception or a signal number."""
+    if isinstance(exc, Terminated) or exc == signal.SIGTERM:
+        return "SIGTERM"
+    return "Ctrl-C"
+
+
+def _handler(signum, frame):
+    if _state["holding"]:
+        if _state["pending"] is None:
+            _state["pending"] = signum
+        return
+    _raise(signum)
+
+
+def _raise(signum):
+    if signum == signal.SIGTERM:
+        raise Terminated()
+    raise KeyboardInterrupt()
+
+
+def install() -> None:
+    """Catch SIGTERM and SIGINT from now on and hold them until :func:`release`
+    (a second call, from ``python -m dnasim.cli``, keeps a signal already held)."""
+    if _state["installed"]:
+        return
+    _state.update(holding=True, pending=None, installed=True)
+    for s in _SIGNALS:
+        signal.signal(s, _handler)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, _SIGNALS)
+
+
+def installed() -> bool:
+    """True when this process was started through :func:`main` (the handlers are ours)."""
+    return _state["installed"] and signal.getsignal(signal.SIGTERM) is _handler
+
+
+def release() -> None:
+    """Stop holding signals; raise for one that arrived while they were held."""
+    if not _state["holding"]:
+        return
+    _state["holding"] = False
+    pending, _state["pending"] = _state["pending"], None
+    if pending is not None:
+        _raise(pending)
+
+
+def _message(what: str) -> str:
+    return f"dnasim: interrupted ({what}) before the command had done anything"
+
+
+def main(argv=None) -> int:
+    """Run the ``dnasim`` command line with the signal handlers installed first."""
+    install()
+    try:
+        import click
+
+        from dnasim.cli import main as cli
+
+        try:
+            code = cli.main(args=argv, prog_name="dnasim", standalone_mode=False)
+        except click.exceptions.Abort as exc:  # a signal while click parsed the options
+            print(_message(signal_name(exc.__cause__)), file=sys.stderr)
+            return EXIT_INTERRUPTED
+        except click.ClickException as exc:
+            exc.show()
+            return exc.exit_code
+        if _state["pending"] is not None:  # held to the end (--help, --version)
+            print(_message(signal_name(_state["pending"])), file=sys.stderr)
+            return EXIT_INTERRUPTED
+        return code if isinstance(code, int) else 0
+    except KeyboardInterrupt as exc:  # before the command line was imported
+        print(_message(signal_name(exc)), file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:  # output piped into a reader that went away (head)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_INTERRUPTED
+    finally:
+        # exiting now: a late signal must not turn the exit into a traceback
+        for s in _SIGNALS:
+            signal.signal(s, signal.SIG_IGN)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
