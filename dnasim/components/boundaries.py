@@ -360,7 +360,7 @@ class MassFlowBoundary(_Boundary):
         Param("m_scale", "kg/s", 1.0, "flow per unit of the signal input m_in: m = m_scale m_in"),
     ) + _STATE_PARAMS
     SIGNAL_INPUTS = (
-        SignalPort("m_in", "1", "flow demand: m = m_scale m_in (when the parameter m is not given)"),
+        SignalPort("m_in", "1", "flow demand: m = m_scale m_in (parameter m not given)"),
     )
     FLUID_PORTS = (
         FluidPort("port", "outlet", "m", "none", "m > 0 into the plant; h or T: inflow state"),

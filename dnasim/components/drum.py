@@ -66,7 +66,7 @@ from dnasim.components.base import (
     Variable,
 )
 from dnasim.components.physics import energy_in, saturation_enthalpies
-from dnasim.errors import PlantError
+from dnasim.errors import PlantError, ResidualDomainError
 
 
 def saturation_properties(medium, p: float):
@@ -74,9 +74,7 @@ def saturation_properties(medium, p: float):
     hl, hv = saturation_enthalpies(medium, p)
     hl, hv = float(hl[0]), float(hv[0])
     if not (np.isfinite(hl) and np.isfinite(hv)):
-        from dnasim.media.errors import PropertyError
-
-        raise PropertyError(
+        raise ResidualDomainError(
             f"{medium.label}: no saturation state at p = {p / 1e5:.6g} bar "
             "(a two-phase vessel needs a sub-critical pressure)"
         )
@@ -364,9 +362,7 @@ class Drum(_SaturatedVessel):
     )
     HAS_BUBBLES = True
     PARAMS = _SaturatedVessel.COMMON_PARAMS + (
-        Param(
-            "Q", "W", None, "heat input (otherwise the signal input 'Q')", time_function=True
-        ),
+        Param("Q", "W", None, "heat input (otherwise the signal input 'Q')", time_function=True),
         Param(
             "tau_b",
             "s",
@@ -385,9 +381,7 @@ class Drum(_SaturatedVessel):
 
     def setup(self):
         if self.params["water_outlet"]:
-            self.PORTS = type(self).PORTS + (
-                ("water", "outlet", "liquid", "saturated water out"),
-            )
+            self.PORTS = type(self).PORTS + (("water", "outlet", "liquid", "saturated water out"),)
         super().setup()
 
 
@@ -423,6 +417,4 @@ class FeedwaterTank(_SaturatedVessel):
             time_function=True,
         ),
     )
-    FLUID_PORTS = tuple(
-        FluidPort(n, role, f"m_{n}", "storage", doc) for n, role, _, doc in PORTS
-    )
+    FLUID_PORTS = tuple(FluidPort(n, role, f"m_{n}", "storage", doc) for n, role, _, doc in PORTS)
