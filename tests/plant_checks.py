@@ -55,7 +55,6 @@ def balances(plant, res):
     M_passed and H_passed, minus the heat to fixed walls (Q_passed). Throughput:
     the total variation of the boundaries' running integrals (mass [kg], energy
     [J]) plus that of the heat to fixed walls."""
-    pipes = [c.name for c in plant.components.values() if isinstance(c, Pipe)]
     bounds = [
         c.name
         for c in plant.components.values()
@@ -64,7 +63,9 @@ def balances(plant, res):
     M, E = stored(plant, res)
     M_in = sum(res[f"{b}.M_passed"] for b in bounds)
     H_in = sum(res[f"{b}.H_passed"] for b in bounds)
-    fixed = [p for p in pipes if f"{p}.Q_passed" in res]
+    # heat leaving through walls: fixed walls, walls with an outer boundary, and
+    # heated vessels (Drum, FeedwaterTank: Q_passed = -integral of the heat input)
+    fixed = [c for c in plant.components if f"{c}.Q_passed" in res]
     Q_out = sum((res[f"{p}.Q_passed"] for p in fixed), np.zeros_like(res.t))
     err_M = np.max(np.abs((M - M[0]) - (M_in - M_in[0])))
     err_E = np.max(np.abs((E - E[0]) - (H_in - H_in[0]) + (Q_out - Q_out[0])))
