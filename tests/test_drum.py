@@ -257,3 +257,37 @@ def test_feedwater_tank_steady_heat_balance():
     assert res["tank.V_l"][-1] == pytest.approx(40.0, rel=1e-3)
     assert m_w * h_w + m_s * h_sat(6e5, 1) == pytest.approx(m_o * h_sat(p, 0), rel=1e-3)
     assert m_s > 0
+
+
+def test_drum_water_outlet_delivers_saturated_liquid_and_balances_close():
+    # a blow-down valve on the optional liquid port: it takes out saturated water,
+    # h'(p), and the balances still close (bound 1e-6 of the throughput, the issue's)
+    p = drum_plant()
+    drum = Drum(
+        "drum",
+        V_t=100.0,
+        A=20.0,
+        m_D=300e3,
+        cp_D=500.0,
+        Q=300e6,
+        tau_b=2.0,
+        p0=80e5,
+        V_l0=60.0,
+        water_outlet=True,
+    )
+    p.components["drum"] = drum
+    p.add(Valve("blowdown", C=2e-3, opening=1.0, m_nominal=5.0))
+    p.add(PressureBoundary("bd_sink", p=1e5, m_nominal=5.0))
+    p.connect("drum.water", "bd")
+    p.connect("blowdown.inlet", "bd")
+    p.connect("blowdown.outlet", "bd_out")
+    p.connect("bd_sink.port", "bd_out")
+    res = p.simulate(300.0, start="given", rtol=1e-7)
+    assert res.success, res.message
+    m_bd = res["blowdown.m"]
+    assert np.all(m_bd[1:] > 1.0)
+    h_l = np.array([h_sat(pi, 0) for pi in res["drum.p"][-3:]])
+    # 1e-7: h_l is an algebraic variable, solved to the Newton tolerance (rtol 1e-7)
+    assert res["bd.h"][-3:] == pytest.approx(h_l, rel=1e-7)
+    err_M, thr_M, err_E, thr_E = drum_balances(res, "drum", ["pump", "sink", "bd_sink"])
+    assert err_M < 1e-6 * thr_M and err_E < 1e-6 * thr_E, (err_M / thr_M, err_E / thr_E)
