@@ -22,7 +22,9 @@ from dnasim.components.controller import PIController
 from dnasim.components.heat_exchanger import HeatExchanger
 from dnasim.components.junctions import Mixer, Splitter
 from dnasim.components.pipe import Pipe
+from dnasim.components.pump import Pump
 from dnasim.components.sensor import TemperatureSensor
+from dnasim.components.turbine import SteamTurbine
 from dnasim.components.valve import Valve
 
 __all__ = [
@@ -44,7 +46,9 @@ __all__ = [
     "PIController",
     "Pipe",
     "PressureBoundary",
+    "Pump",
     "Splitter",
+    "SteamTurbine",
     "TemperatureSensor",
     "Valve",
 ]
