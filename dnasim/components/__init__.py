@@ -18,6 +18,7 @@ from dnasim.components.base import (
     Variable,
 )
 from dnasim.components.boundaries import MassFlowBoundary, PressureBoundary
+from dnasim.components.control_valve import CheckValve, ControlValve
 from dnasim.components.controller import PIController
 from dnasim.components.heat_exchanger import HeatExchanger
 from dnasim.components.junctions import Mixer, Splitter
@@ -40,6 +41,8 @@ __all__ = [
     "Switch",
     "Variable",
     "Attemperator",
+    "CheckValve",
+    "ControlValve",
     "HeatExchanger",
     "MassFlowBoundary",
     "Mixer",

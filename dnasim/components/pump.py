@@ -50,7 +50,8 @@ class Pump(Component):
     through the outlet carries h_2. The energy flows at the ports and P balance
     exactly: E_out - E_in = P. When p_out < p_in (a stopped pump, or flow beyond
     the curve's run-out) the smooth max (softplus, width dp_reg) makes the flow
-    isenthalpic instead of cooling it.
+    isenthalpic instead of cooling it. At zero flow the shaft power is zero: the
+    shut-off power of a real pump (heating the trapped water) is not modelled.
     """
 
     PARAMS = (
