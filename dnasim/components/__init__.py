@@ -18,6 +18,7 @@ from dnasim.components.base import (
     Variable,
 )
 from dnasim.components.boundaries import MassFlowBoundary, PressureBoundary
+from dnasim.components.condenser import Condenser
 from dnasim.components.control_valve import CheckValve, ControlValve
 from dnasim.components.controller import PIController
 from dnasim.components.heat_exchanger import HeatExchanger
@@ -42,6 +43,7 @@ __all__ = [
     "Variable",
     "Attemperator",
     "CheckValve",
+    "Condenser",
     "ControlValve",
     "HeatExchanger",
     "MassFlowBoundary",
