@@ -17,8 +17,8 @@ from dnasim.components.base import (
     Variable,
 )
 from dnasim.components.physics import (
-    G,
     M_REG_REL,
+    G,
     energy_in,
     friction_dp,
     softplus,
