@@ -164,6 +164,55 @@ def test_stopped_pump_is_a_resistance_in_reverse():
     assert row["a.h"] == pytest.approx(row["b.h"], abs=1e-6)
 
 
+TABLE_Q = [0.0, 0.005, 0.01, 0.015, 0.02]  # [m3/s]
+TABLE_H = [100.0, 98.0, 88.0, 70.0, 44.0]  # [m], flat at shut-off like a real curve
+
+
+@pytest.mark.parametrize("speed", [1.0, 0.7])
+def test_tabulated_head_curve_with_affinity_laws(speed):
+    from scipy.interpolate import PchipInterpolator
+
+    row = steady(
+        pump_plant(
+            speed=speed,
+            H0=None,
+            H_nominal=None,
+            Q_nominal=None,
+            curve_Q=TABLE_Q,
+            curve_H=TABLE_H,
+            head_curve="table",
+        )
+    )
+    rho = WATER.state(row["a.p"], row["a.h"]).rho
+    Q = row["pump.m"] / rho
+    assert 0 < Q / speed < TABLE_Q[-1]  # inside the table at the similar point
+    # H = r^2 H_1(Q/r), H_1 scipy's PCHIP through the points; no regularisation
+    # inside the table: to the steady solution's 1e-9 (relative to H ~ 50 m)
+    H_1 = PchipInterpolator(TABLE_Q, TABLE_H)
+    dp = row["b.p"] - row["a.p"]
+    assert dp / (rho * G) == pytest.approx(speed**2 * float(H_1(Q / speed)), rel=1e-9)
+
+
+def test_tabulated_head_curve_stopped_pump_is_a_resistance():
+    row = steady(
+        pump_plant(
+            speed=0.0,
+            H0=None,
+            H_nominal=None,
+            Q_nominal=None,
+            curve_Q=TABLE_Q,
+            curve_H=TABLE_H,
+            head_curve="table",
+        )
+    )
+    assert row["pump.m"] < -1.0  # the header pushes water back through the stopped pump
+    b = np.polyfit(TABLE_Q, TABLE_H, 2)[0]  # beyond the table: the fitted curvature
+    rho = WATER.state(row["b.p"], row["b.h"]).rho
+    Q = row["pump.m"] / rho
+    # regularisation b Q sqrt(Q^2 + Q_reg^2): (Q_reg/Q)^2/2 ~ 6e-5 relative -> 1e-4
+    assert row["b.p"] - row["a.p"] == pytest.approx(rho * G * b * Q * abs(Q), rel=1e-4)
+
+
 def test_pump_curve_from_points_and_errors():
     # three points on H = 100 - 1e5 Q^2 give that parabola back (exact fit, round-off)
     p = Pump("p", curve_Q=[0.0, 0.01, 0.02], curve_H=[100.0, 90.0, 60.0], speed=1.0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from dnasim.components.base import (
@@ -41,6 +43,15 @@ class Pump(Component):
     or the points ``curve_Q`` [m3/s], ``curve_H`` [m] at nominal speed (least-squares
     quadratic H0 + a q + b q^2, exact through three points).
 
+    Tabulated head (head_curve = "table", points curve_Q from 0 up, curve_H):
+      H_1(q) = PCHIP through the points for 0 <= q <= q_e (the last point),
+      H(Q, r) = r^2 H_1(Q/r)                                   0 <= Q <= r q_e
+              = r^2 H_e + s_e r (Q - r q_e) + b D sqrt(D^2 + Q_reg^2),  D = Q - r q_e > 0
+              = r^2 H_1(0) + s_0 r Q + b Q sqrt(Q^2 + Q_reg^2)         Q < 0
+      (s_0, s_e [m s/m3] the table's end slopes, b the least-squares quadratic's
+      curvature: beyond the table the curve continues as a parabola, so that the
+      affinity law stays defined down to r = 0, where it is the same resistance.)
+
     No-flow and reverse flow: at Q = 0 the head is the shut-off head H0 r^2; the
     term b Q sqrt(Q^2 + Q_reg^2) (Q_reg = 1e-2 m_nominal/rho) keeps dH/dQ < 0 at
     Q = 0, so a pump against a closed valve or between two fixed pressures stays
@@ -68,6 +79,14 @@ class Pump(Component):
             kind="array",
         ),
         Param("curve_H", "m", None, "heads of the head-curve points", kind="array"),
+        Param(
+            "head_curve",
+            "1",
+            "quadratic",
+            "the points as a least-squares quadratic, or a table (PCHIP)",
+            kind="string",
+            choices=("quadratic", "table"),
+        ),
         Param(
             "speed",
             "1",
@@ -111,6 +130,9 @@ class Pump(Component):
         P = self.params
         self.speed_from_signal = P["speed"] is None
         self.H0, self.a, self.b = self._curve()
+        self._head_table = None
+        if P["head_curve"] == "table":
+            self._head_table = self._table()
         if not self.b < 0:
             raise PlantError(
                 f"component '{self.name}' (Pump): the head curve's quadratic coefficient b = "
@@ -160,6 +182,22 @@ class Pump(Component):
         if P["H_nominal"] is None or P["Q_nominal"] is None:
             raise PlantError(f"{name}: with H0 give b, or H_nominal and Q_nominal")
         return P["H0"], 0.0, (P["H_nominal"] - P["H0"]) / P["Q_nominal"] ** 2
+
+    def _table(self):
+        """(PCHIP H_1, q_e [m3/s], H_e [m], s_0, s_e [m s/m3]) of a tabulated head curve."""
+        name = f"component '{self.name}' (Pump)"
+        if self.params["curve_Q"] is None:
+            raise PlantError(f"{name}: head_curve = 'table' needs the points curve_Q, curve_H")
+        q, h = np.asarray(self.params["curve_Q"]), np.asarray(self.params["curve_H"])
+        if q[0] != 0.0 or np.any(np.diff(q) <= 0):
+            raise PlantError(
+                f"{name}: the head table's curve_Q must start at 0 (shut-off) and rise strictly"
+            )
+        from scipy.interpolate import PchipInterpolator
+
+        f = PchipInterpolator(q, h)
+        d = f.derivative()
+        return f, float(q[-1]), float(h[-1]), float(d(0.0)), float(d(q[-1]))
 
     def fluid_ports(self):
         eps = self.m_eps
@@ -250,7 +288,16 @@ class Pump(Component):
     def head(self, Q, r, rho):
         """H(Q, r) [m] at volume flow Q [m3/s], relative speed r, density rho [kg/m3]."""
         Q_reg = M_REG_REL * self.params["m_nominal"] / rho
-        return self.H0 * r * r + self.a * r * Q + self.b * Q * np.sqrt(Q * Q + Q_reg * Q_reg)
+        b = self.b
+        if self._head_table is None:
+            return self.H0 * r * r + self.a * r * Q + b * Q * np.sqrt(Q * Q + Q_reg * Q_reg)
+        f, q_e, H_e, s_0, s_e = self._head_table
+        if Q < 0.0:
+            return r * r * float(f(0.0)) + s_0 * r * Q + b * Q * math.sqrt(Q * Q + Q_reg * Q_reg)
+        D = Q - r * q_e
+        if D > 0.0:
+            return r * r * H_e + s_e * r * D + b * D * math.sqrt(D * D + Q_reg * Q_reg)
+        return r * r * float(f(Q / r)) if r > 0.0 else 0.0
 
     def efficiency(self, Q, r):
         """eta(Q, r) [-]: constant, or the table at the similar point Q/r."""
