@@ -69,7 +69,9 @@ class Condenser(Component):
     Given start (start = "given"): pressure p0 and hotwell level level0 (default
     0.2 V / A_hotwell); the shell is saturated liquid below the level and saturated
     steam above it. A steady start fixes the level only through the hotwell's
-    static head (weakly): prefer a given start or a level controller.
+    static head (weakly): prefer a given start or a level controller. Keep the
+    hotwell from running dry: with no liquid left (x >= 1) the level is 0 but the
+    condensate port still delivers saturated liquid h'.
     """
 
     PARAMS = (

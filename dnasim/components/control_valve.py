@@ -91,7 +91,9 @@ class ControlValve(Component):
 
     Throttling is isenthalpic both ways (fluid leaves through the outlet with the
     inlet node's h and vice versa), the flow is odd in dp with a finite slope at
-    dp = 0 (index 1 at zero flow), and a closed valve keeps its leakage.
+    dp = 0 (index 1 at zero flow), and a closed valve keeps its leakage. A signal
+    z is used as given, not clipped (as in ``Valve``): limit the driving
+    controller's output to [0, 1].
     """
 
     PARAMS = (
