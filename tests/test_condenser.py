@@ -138,3 +138,23 @@ def test_parameter_errors():
         Condenser("c", V=10.0, A_hotwell=2.0)
     with pytest.raises(PlantError, match="needs the duty Q"):
         Condenser("c", V=10.0, A_hotwell=2.0, cooling="duty")
+
+
+def test_turbine_condenser_pump_plant_file():
+    # steady start at the turbine's nominal point: the exhaust flow is the cone
+    # law's nominal 10 kg/s, the condensate pump takes it away at the level set point
+    plant, res = run_file("turbine_condenser.toml")
+    assert res.success
+    err_M, thr_M, err_E, thr_E = balances(plant, res)
+    assert err_M < 1e-6 * thr_M  # as above (turbine and pump work included)
+    assert err_E < 1e-6 * thr_E
+    assert res["turbine.m"][0] == pytest.approx(10.0, rel=1e-6)  # K_t from this point
+    assert res["pump.m"][0] == pytest.approx(10.0, rel=1e-6)
+    assert res["condenser.level"][0] == pytest.approx(0.5, abs=1e-9)
+    # 60 -> 40 bar at 480 degC: cone law at a large pressure ratio, m ~ p sqrt(rho/p):
+    # 0.66 (rho is nearly proportional to p) within 2 %
+    assert res["turbine.m"][-1] / res["turbine.m"][0] == pytest.approx(0.66, rel=0.02)
+    # the exhaust is wet and the condenser pressure falls with the duty
+    assert np.all(res["condenser.x"] < 0.01)
+    assert res["condenser.p_v"][-1] < res["condenser.p_v"][0]
+    assert np.all(res["turbine.P"] > 0) and np.all(res["pump.P"] > 0)
