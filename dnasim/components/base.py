@@ -87,7 +87,8 @@ class Param:
     """A component parameter.
 
     ``unit`` is an SI unit string ("Pa", "K", "kg/s", "J/kg", "m3", "W/K", "1", "s").
-    ``kind`` is "number", "string", "bool" or "int". With ``time_function=True`` the
+    ``kind`` is "number", "string", "bool", "int" or "array" (a list of numbers,
+    each in ``unit`` and within ``min``/``max``; a tuple of floats). With ``time_function=True`` the
     value may be a number or a ``dnasim.timefunctions`` function of time; the
     component then reads it as ``self.param_at("name", t)``.
     ``choices`` restricts a string parameter. ``default=REQUIRED`` means the user
@@ -406,6 +407,8 @@ class Component:
     def _validate(self, p: Param, value):
         if value is None:
             return None
+        if p.kind == "array":
+            return self._validate_array(p, value)
         if p.kind not in ("string", "bool") and isinstance(value, str):
             from dnasim.units import UnitError
 
@@ -456,6 +459,28 @@ class Component:
             return f
         v = _check_number(self.name, p, value)
         return as_time_function(v) if p.time_function else v
+
+    def _validate_array(self, p: Param, value):
+        """A non-empty list of numbers (or unit strings) in ``p.unit``, each checked
+        like a number parameter; returned as a tuple of floats [SI]."""
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) == 0:
+            raise PlantError(
+                f"component '{self.name}': parameter '{p.name}' must be a non-empty list of "
+                f"numbers [{p.unit}], got {value!r}"
+            )
+        out = []
+        for v in value:
+            if isinstance(v, str):
+                from dnasim.units import UnitError
+
+                try:
+                    v = p.si_value(v)
+                except UnitError as err:
+                    raise PlantError(
+                        f"component '{self.name}': parameter '{p.name}' [{p.unit}]: {err}"
+                    ) from None
+            out.append(_check_number(self.name, p, v))
+        return tuple(out)
 
     def setup(self):
         """Hook: check parameter combinations, precompute derived constants."""
