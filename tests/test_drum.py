@@ -295,3 +295,29 @@ def test_drum_water_outlet_delivers_saturated_liquid_and_balances_close():
     assert res["bd.h"][-3:] == pytest.approx(h_l, rel=1e-7)
     err_M, thr_M, err_E, thr_E = drum_balances(res, "drum", ["pump", "sink", "bd_sink"])
     assert err_M < 1e-6 * thr_M and err_E < 1e-6 * thr_E, (err_M / thr_M, err_E / thr_E)
+
+
+def test_feedwater_heater_plant_heats_to_saturation_and_balances_close():
+    from plant_checks import balances
+
+    loaded = load(ROOT / "plants" / "feedwater_heater.toml")
+    res = simulate_plant(loaded.plant, loaded.simulation)
+    assert res.success, res.message
+    # balances with the turbines' work (bound 1e-6 of the throughput, the issue's)
+    err_M, thr_M, err_E, thr_E = balances(loaded.plant, res)
+    assert err_M < 1e-6 * thr_M and err_E < 1e-6 * thr_E, (err_M / thr_M, err_E / thr_E)
+    # steady start: the extraction steam heats the condensate to saturation,
+    # m_c h_c + m_s h_ext = (m_c + m_s) h'(p) (hand, CoolProp IF97; 1e-6: the steady
+    # solve's tolerance at rtol 1e-6)
+    p = res["deaerator.p"][0]
+    m_c, m_s = res["condensate.m"][0], res["extraction_valve.m"][0]
+    h_c = PropsSI("H", "P", res["n_cond.p"][0], "T", 318.15, WATER)
+    h_s = res["n_ext.h"][0]
+    assert m_c * h_c + m_s * h_s == pytest.approx((m_c + m_s) * h_sat(p, 0), rel=1e-6)
+    assert 3e5 < p < 5.5e5 and m_s > 1.0
+    # the feed valve opens at 300 s: the level first falls, the controller raises the
+    # condensate flow, and the level comes back up through its set point
+    t, level = res.t, res["deaerator.level"]
+    assert np.min(level[(t > 300) & (t < 700)]) < 2.47
+    assert np.max(level[t > 700]) > 2.5
+    assert np.max(res["condensate.m"]) > 1.3 * res["condensate.m"][0]

@@ -274,7 +274,14 @@ def test_phase_switches_are_declared_per_volume_when_asked():
 
 
 @pytest.mark.parametrize(
-    "name", ["air_pipe.toml", "attemperator.toml", "superheater_line.toml", "drum_boiler.toml"]
+    "name",
+    [
+        "air_pipe.toml",
+        "attemperator.toml",
+        "superheater_line.toml",
+        "drum_boiler.toml",
+        "feedwater_heater.toml",
+    ],
 )
 def test_shipped_plants_close_mass_and_energy(name):
     # every storage (pipes, attemperators, walls) against the boundaries' running
