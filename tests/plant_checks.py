@@ -52,10 +52,10 @@ def balances(plant, res):
     """Mass and energy balance errors over the run and the throughputs.
 
     Stored: ``stored()``. Passed (positive into the plant): the boundaries'
-    M_passed and H_passed, minus the heat to fixed walls (Q_passed). Throughput:
+    M_passed and H_passed, minus the heat to fixed walls and condensers (Q_passed),
+    plus the shaft work of pumps, minus that of turbines (W). Throughput:
     the total variation of the boundaries' running integrals (mass [kg], energy
     [J]) plus that of the heat to fixed walls."""
-    pipes = [c.name for c in plant.components.values() if isinstance(c, Pipe)]
     bounds = [
         c.name
         for c in plant.components.values()
@@ -64,13 +64,22 @@ def balances(plant, res):
     M, E = stored(plant, res)
     M_in = sum(res[f"{b}.M_passed"] for b in bounds)
     H_in = sum(res[f"{b}.H_passed"] for b in bounds)
-    fixed = [p for p in pipes if f"{p}.Q_passed" in res]
+    # heat leaving the fluid [J]: fixed walls, walls with an outer boundary, a
+    # condenser's cooling, heated vessels (Drum, FeedwaterTank: -integral of the heat)
+    fixed = [c for c in plant.components if f"{c}.Q_passed" in res]
     Q_out = sum((res[f"{p}.Q_passed"] for p in fixed), np.zeros_like(res.t))
+    # shaft work of fluid machines [J]: into the fluid (Pump), out of it (SteamTurbine)
+    sign = {"Pump": 1.0, "SteamTurbine": -1.0}
+    machines = [c for c in plant.components.values() if type(c).__name__ in sign]
+    W_in = sum(
+        (sign[type(c).__name__] * res[f"{c.name}.W"] for c in machines), np.zeros_like(res.t)
+    )
     err_M = np.max(np.abs((M - M[0]) - (M_in - M_in[0])))
-    err_E = np.max(np.abs((E - E[0]) - (H_in - H_in[0]) + (Q_out - Q_out[0])))
+    err_E = np.max(np.abs((E - E[0]) - (H_in - H_in[0]) + (Q_out - Q_out[0]) - (W_in - W_in[0])))
     thr_M = sum(np.sum(np.abs(np.diff(res[f"{b}.M_passed"]))) for b in bounds)
     thr_E = sum(np.sum(np.abs(np.diff(res[f"{b}.H_passed"]))) for b in bounds)
     thr_E += sum(np.sum(np.abs(np.diff(res[f"{p}.Q_passed"]))) for p in fixed)
+    thr_E += sum(np.sum(np.abs(np.diff(res[f"{c.name}.W"]))) for c in machines)
     return err_M, thr_M, err_E, thr_E
 
 

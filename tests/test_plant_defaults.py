@@ -276,7 +276,16 @@ def test_phase_switches_are_declared_per_volume_when_asked():
 # ---------------------------------------------------------------- balances
 
 
-@pytest.mark.parametrize("name", ["air_pipe.toml", "attemperator.toml", "superheater_line.toml"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "air_pipe.toml",
+        "attemperator.toml",
+        "superheater_line.toml",
+        "drum_boiler.toml",
+        "feedwater_heater.toml",
+    ],
+)
 def test_shipped_plants_close_mass_and_energy(name):
     # every storage (pipes, attemperators, walls) against the boundaries' running
     # integrals and the heat to fixed walls; measured 1e-15 of the throughput, the

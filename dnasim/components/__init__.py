@@ -18,11 +18,15 @@ from dnasim.components.base import (
     Variable,
 )
 from dnasim.components.boundaries import MassFlowBoundary, PressureBoundary
+from dnasim.components.condenser import Condenser
+from dnasim.components.control_valve import CheckValve, ControlValve
 from dnasim.components.controller import PIController
 from dnasim.components.heat_exchanger import HeatExchanger
 from dnasim.components.junctions import Mixer, Splitter
 from dnasim.components.pipe import Pipe
+from dnasim.components.pump import Pump
 from dnasim.components.sensor import TemperatureSensor
+from dnasim.components.turbine import SteamTurbine
 from dnasim.components.valve import Valve
 
 __all__ = [
@@ -38,13 +42,18 @@ __all__ = [
     "Switch",
     "Variable",
     "Attemperator",
+    "CheckValve",
+    "Condenser",
+    "ControlValve",
     "HeatExchanger",
     "MassFlowBoundary",
     "Mixer",
     "PIController",
     "Pipe",
     "PressureBoundary",
+    "Pump",
     "Splitter",
+    "SteamTurbine",
     "TemperatureSensor",
     "Valve",
 ]

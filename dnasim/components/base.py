@@ -94,10 +94,10 @@ class Param:
     """A component parameter.
 
     ``unit`` is an SI unit string ("Pa", "K", "kg/s", "J/kg", "m3", "W/K", "1", "s").
-    ``kind`` is "number", "string", "bool", "int" or "list" (a list of numbers in
-    SI). With ``time_function=True`` the value may be a number or a
-    ``dnasim.timefunctions`` function of time; the component then reads it as
-    ``self.param_at("name", t)``.
+    ``kind`` is "number", "string", "bool", "int" or "array" (a list of numbers,
+    each in ``unit`` and within ``min``/``max``; a tuple of floats). With ``time_function=True`` the
+    value may be a number or a ``dnasim.timefunctions`` function of time; the
+    component then reads it as ``self.param_at("name", t)``.
     ``choices`` restricts a string parameter. ``default=REQUIRED`` means the user
     must give it; ``default=None`` means "not given" (optional).
     """
@@ -460,7 +460,9 @@ class Component:
     def _validate(self, p: Param, value):
         if value is None:
             return None
-        if p.kind not in ("string", "bool", "list") and isinstance(value, str):
+        if p.kind == "array":
+            return self._validate_array(p, value)
+        if p.kind not in ("string", "bool") and isinstance(value, str):
             from dnasim.units import UnitError
 
             try:
@@ -489,17 +491,6 @@ class Component:
                     f"{value!r}"
                 )
             return bool(value)
-        if p.kind == "list":
-            ok = isinstance(value, (list, tuple, np.ndarray)) and all(
-                isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-                for v in value
-            )
-            if not ok:
-                raise PlantError(
-                    f"component '{self.name}': parameter '{p.name}' must be a list of numbers "
-                    f"[{p.unit}], got {value!r}"
-                )
-            return [float(v) for v in value]
         if p.kind == "int":
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise PlantError(
@@ -543,6 +534,28 @@ class Component:
                 self.params[name] = self._validate(p, x)
         errors.raise_if_any()
         self.signal_unit_values = {}
+
+    def _validate_array(self, p: Param, value):
+        """A non-empty list of numbers (or unit strings) in ``p.unit``, each checked
+        like a number parameter; returned as a tuple of floats [SI]."""
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) == 0:
+            raise PlantError(
+                f"component '{self.name}': parameter '{p.name}' must be a non-empty list of "
+                f"numbers [{p.unit}], got {value!r}"
+            )
+        out = []
+        for v in value:
+            if isinstance(v, str):
+                from dnasim.units import UnitError
+
+                try:
+                    v = p.si_value(v)
+                except UnitError as err:
+                    raise PlantError(
+                        f"component '{self.name}': parameter '{p.name}' [{p.unit}]: {err}"
+                    ) from None
+            out.append(_check_number(self.name, p, v))
+        return tuple(out)
 
     def setup(self):
         """Hook: check parameter combinations, precompute derived constants."""

@@ -47,7 +47,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from dnasim.components.base import Component, Equation, FluidPort, Param, Switch, Variable
+from dnasim.components.base import (
+    Component,
+    Equation,
+    FluidPort,
+    Param,
+    SignalPort,
+    Switch,
+    Variable,
+)
 from dnasim.components.physics import M_EPS_REL, energy_in, is_condensable
 from dnasim.errors import PlantError, ResidualDomainError
 from dnasim.media.errors import PropertyError
@@ -392,9 +400,18 @@ class MassFlowBoundary(_Boundary):
     PRESSURE_ROLE = "none"
     PARAMS = (
         Param(
-            "m", "kg/s", doc="mass flow into the plant (negative: out of it)", time_function=True
+            "m",
+            "kg/s",
+            None,
+            "mass flow into the plant (negative: out of it); otherwise m_scale times the "
+            "signal input 'm_in'",
+            time_function=True,
         ),
+        Param("m_scale", "kg/s", 1.0, "flow per unit of the signal input m_in: m = m_scale m_in"),
     ) + _STATE_PARAMS
+    SIGNAL_INPUTS = (
+        SignalPort("m_in", "1", "flow demand: m = m_scale m_in (parameter m not given)"),
+    )
     FLUID_PORTS = (
         FluidPort("port", "outlet", "m", "none", "m > 0 into the plant; h or T: inflow state"),
     )
@@ -402,15 +419,25 @@ class MassFlowBoundary(_Boundary):
     def supply_pressure(self, t, x):
         return x["port.p"]
 
+    def signal_inputs(self):
+        return list(self.SIGNAL_INPUTS) if self.params["m"] is None else []
+
+    def flow_set(self, t, x):
+        """The prescribed flow m(t) [kg/s]: the parameter, or the signal input m_in."""
+        if self.params["m"] is None:
+            return self.params["m_scale"] * x["m_in"]
+        return self.param_at("m", t)
+
     def equations(self):
+        signal = ("m_in",) if self.params["m"] is None else ()
         return (
             [
                 Equation(
                     "flow",
-                    y=("m",),
+                    y=("m",) + signal,
                     unit="kg/s",
-                    doc="m = m(t)",
-                    residual=lambda t, x, xp: x["m"] - self.param_at("m", t),
+                    doc="m = m(t), or m = m_scale m_in from the signal",
+                    residual=lambda t, x, xp: x["m"] - self.flow_set(t, x),
                 )
             ]
             + self.supply_equations(("port.p",))
@@ -423,7 +450,7 @@ class MassFlowBoundary(_Boundary):
         return {"port": (None, self.param_at("h", t0))}
 
     def initial_guess(self, t0, x):
-        x["m"] = self.param_at("m", t0)
+        x["m"] = self.flow_set(t0, x)
         super().initial_guess(t0, x)
         if self.has_supply and self.params["h"] is None and x["m"] > 0:
             x["port.h"] = x["h_supply"]

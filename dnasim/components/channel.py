@@ -97,6 +97,8 @@ class Channel:
         wall: list[str],
         heat_transfer: str = "lmtd",
         dp_nominal: float | None = None,
+        kA_exponent: float = 0.0,
+        m_kA: float | None = None,
     ):
         self.prefix = prefix
         self.inlet, self.outlet = inlet, outlet
@@ -116,6 +118,10 @@ class Channel:
         if self.k_i is None:
             self.c_i = (dp_nominal or 0.0) / n / max(m_nominal, 1e-12) ** 2
         self.wall = wall  # local name of the wall temperature next to each volume
+        # kA_i (|m|/m_kA)^e: the heat transfer coefficient's flow dependence
+        # (``walls.flow_scaled_kA``), off for e = 0
+        self.kA_exponent = float(kA_exponent)
+        self.m_kA = float(m_kA if m_kA is not None else m_nominal)
         P = prefix
         self.m, self.M, self.U, self.Q = P + "m", P + "M", P + "U", P + "Q"
         self.pv, self.hv = P + "p_v", P + "h_v"
@@ -170,6 +176,7 @@ class Channel:
             return ()
 
         ie_inflow = inflow if self.mean else none
+        kA_flows = flows if self.kA_exponent else none  # kA ~ m^e reads the flows
         ht_inflow = none if self.heat_transfer == "outlet" else inflow
 
         def block(key):
@@ -214,7 +221,7 @@ class Channel:
             Equation(
                 P + "heat",
                 size=n,
-                y=lambda i: (f"{Q}[{i}]", self.wall[i]) + S(i + 1) + ht_inflow(i),
+                y=lambda i: (f"{Q}[{i}]", self.wall[i]) + S(i + 1) + kA_flows(i) + ht_inflow(i),
                 doc=f"Q[i] = kA_i dT ({self.heat_transfer})",
                 unit="W",
                 residual=block("heat"),
@@ -291,7 +298,12 @@ class Channel:
             dT = T_i - T_wall
         else:  # "mean"
             dT = 0.5 * (T_a + T_i) - T_wall
-        heat = Q - self.kA_i * dT
+        kA = self.kA_i
+        if self.kA_exponent:
+            from dnasim.components.walls import flow_scaled_kA
+
+            kA = flow_scaled_kA(kA, 0.5 * (m[:-1] + m[1:]), self.m_kA, self.kA_exponent, self.m_reg)
+        heat = Q - kA * dT
         mf = m[:-1]
         rho_f = upwind_mean_weighted(wp[:-1], wm[:-1], rho[:-2], rho[1:-1])
         momentum = p[:-2] - p[1:-1] - self.friction(mf, rho_f) - rho_f * G * self.dz_i

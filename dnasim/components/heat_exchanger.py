@@ -1,4 +1,5 @@
-"""HeatExchanger: counter-flow, lumped in n_sections, with wall heat capacity."""
+"""HeatExchanger: counter- or parallel-flow, lumped in n_sections, with wall heat
+capacity and per-side flow-dependent heat transfer coefficients."""
 
 from __future__ import annotations
 
@@ -11,8 +12,11 @@ from dnasim.errors import PlantError
 
 
 class HeatExchanger(Component):
-    """Counter-flow heat exchanger: a hot and a cold channel of n_sections volumes
-    each, sharing a wall. Hot section i faces cold section n-1-i (counter-flow).
+    """Heat exchanger: a hot and a cold channel of n_sections volumes each, sharing
+    a wall. Hot section i faces cold section n-1-i (flow = "counter", default) or
+    cold section i (flow = "parallel"). With gas on one side and water on the
+    other (media per side: hot_medium, cold_medium, or from the nodes) it is an
+    economiser, an evaporator or a superheater.
 
     Each channel is a series of volumes as in ``Pipe`` (prefix hot_ / cold_;
     ``dnasim.components.channel``): mass, energy, density, internal_energy, heat,
@@ -20,7 +24,13 @@ class HeatExchanger(Component):
     actual flow (either direction), U = M u per volume (mixed volumes), and
       heat      Q_side[i] = kA_side/n LMTD(T_a - T_w, T_i - T_w)   (fluid -> wall)
     and the wall, section i (C_i = C_wall/n):
-      wall[i]   C_i dT_w[i]/dt = hot_Q[i] + cold_Q[n-1-i]
+      wall[i]   C_i dT_w[i]/dt = hot_Q[i] + cold_Q[j(i)],  j = n-1-i (counter), i (parallel)
+
+    Per-side heat transfer coefficient with nominal-point scaling
+    (``dnasim.components.walls.flow_scaled_kA``; alpha ~ m^0.8 for turbulent flow):
+      kA_side(m) = side_kA (sqrt(m^2 + m_reg^2)/side_m_kA)^side_kA_exponent
+    with m the section's mean face flow, side_m_kA the flow at which side_kA
+    holds (default m_nominal); side_kA_exponent = 0 (default) keeps kA constant.
 
     Friction per side, per section: with side_k given, dp = k/n m sqrt(m^2 + m_reg^2)/rho;
     otherwise the nominal-point law dp = side_dp_nominal/n m sqrt(m^2 + m_reg^2)/m_nominal^2
@@ -28,7 +38,6 @@ class HeatExchanger(Component):
     0.1 bar). A side without friction (k = 0 or dp_nominal = 0) joins storage
     volumes with no resistance: index 2, reported by ``dnasim check``.
 
-    Both fluids use the component's medium (one medium per component).
     Outlets are storage volumes (lead them to a resistance).
     Given start: fluid temperatures hot_T0, cold_T0; wall at their mean.
     Balances: d(sum M)/dt = inflows - outflows; d(U_hot + U_cold + C_wall T_w)/dt =
@@ -64,6 +73,32 @@ class HeatExchanger(Component):
             kind="bool",
         ),
         Param("C_wall", "J/K", doc="wall heat capacity", min=0.0),
+        Param(
+            "flow",
+            "1",
+            "counter",
+            "flow arrangement: counter-flow or parallel-flow",
+            kind="string",
+            choices=("counter", "parallel"),
+        ),
+        Param(
+            "hot_kA_exponent",
+            "1",
+            0.0,
+            "hot side: kA ~ m^e (0.8: turbulent convection; 0: constant)",
+            min=0.0,
+            max=2.0,
+        ),
+        Param(
+            "cold_kA_exponent",
+            "1",
+            0.0,
+            "cold side: kA ~ m^e (0.8: turbulent convection; 0: constant)",
+            min=0.0,
+            max=2.0,
+        ),
+        Param("hot_m_kA", "kg/s", None, "hot flow at which hot_kA holds (default m_nominal)"),
+        Param("cold_m_kA", "kg/s", None, "cold flow at which cold_kA holds (default m_nominal)"),
         Param("n_sections", "1", 1, "number of sections", min=1, max=1000, kind="int"),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow", min=0.0),
         Param(
@@ -105,9 +140,12 @@ class HeatExchanger(Component):
         if P["C_wall"] <= 0 or P["hot_V"] <= 0 or P["cold_V"] <= 0:
             raise PlantError(f"component '{self.name}': hot_V, cold_V and C_wall must be > 0")
         n = self.n = P["n_sections"]
+        self.parallel = P["flow"] == "parallel"
+        #: the wall section next to cold section i
+        self.cold_wall = list(range(n)) if self.parallel else [n - 1 - i for i in range(n)]
         self.channels = {}
         for side in ("hot", "cold"):
-            wall = [f"T_w[{i}]" if side == "hot" else f"T_w[{n - 1 - i}]" for i in range(n)]
+            wall = [f"T_w[{i}]" if side == "hot" else f"T_w[{self.cold_wall[i]}]" for i in range(n)]
             self.channels[side] = Channel(
                 prefix=f"{side}_",
                 inlet=f"{side}_in",
@@ -123,6 +161,8 @@ class HeatExchanger(Component):
                 dT_reg=P["dT_reg"],
                 internal_energy="outlet",
                 wall=wall,
+                kA_exponent=P[f"{side}_kA_exponent"],
+                m_kA=P[f"{side}_m_kA"],
             )
 
     def fluid_ports(self):
@@ -204,15 +244,17 @@ class HeatExchanger(Component):
     def equations(self):
         n, C_i = self.n, self.params["C_wall"] / self.n
         eqs = self.channels["hot"].equations() + self.channels["cold"].equations()
+        cold_wall = self.cold_wall  # the wall mapping is its own inverse
         eqs.append(
             Equation(
                 "wall",
                 size=n,
-                y=lambda i: (f"hot_Q[{i}]", f"cold_Q[{n - 1 - i}]"),
+                y=lambda i: (f"hot_Q[{i}]", f"cold_Q[{cold_wall[i]}]"),
                 yp=lambda i: (f"T_w[{i}]",),
-                doc=f"{C_i:g} dT_w[i]/dt = hot_Q[i] + cold_Q[n-1-i]",
+                doc=f"{C_i:g} dT_w[i]/dt = hot_Q[i] + cold_Q[j(i)]"
+                " (j(i) = n-1-i counter-flow, i parallel-flow)",
                 unit="W",
-                residual=lambda t, x, xp: C_i * xp["T_w"] - (x["hot_Q"] + x["cold_Q"][::-1]),
+                residual=lambda t, x, xp: C_i * xp["T_w"] - (x["hot_Q"] + x["cold_Q"][cold_wall]),
             )
         )
         return eqs
@@ -222,7 +264,9 @@ class HeatExchanger(Component):
         T_w = x["T_w"]
         hot, cold = self.channels["hot"], self.channels["cold"]
         work = hot.blocks(x, xp, hot.evaluate(self.side_medium("hot"), x), T_w)
-        work.update(cold.blocks(x, xp, cold.evaluate(self.side_medium("cold"), x), T_w[::-1]))
+        work.update(
+            cold.blocks(x, xp, cold.evaluate(self.side_medium("cold"), x), T_w[self.cold_wall])
+        )
         return work
 
     def outputs(self):
@@ -250,4 +294,4 @@ class HeatExchanger(Component):
             else:
                 h = np.full(n, h_in)
             T[side] = ch.guess(x, self.side_medium(side), p, h, self.params["m_nominal"])
-        x["T_w"] = 0.5 * (T["hot"] + T["cold"][::-1])
+        x["T_w"] = 0.5 * (T["hot"] + T["cold"][self.cold_wall])

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
@@ -43,6 +45,14 @@ class Pipe(Component):
 
     Balances over a run: d(M_total)/dt = m[0] - m[n];
     d(U_total + E_wall)/dt = E[0] - E[n] - (sum Q with a fixed wall: Q_passed).
+
+    Wall model (``dnasim.components.walls``), when wall_layers > 0 or an outer
+    boundary is given: the wall of each volume is 1 (lumped) or wall_layers + 1
+    radial nodes (r_in, r_out, length, wall_conductivity; shell conductances
+    2 pi lambda l/ln(r_k+1/r_k)), with C_wall spread over the nodes, and on the
+    outside convection kA_outer (T_outer(t) - T), a heat flux Q_outer(t) [W], or a
+    fixed outer surface temperature T_outer(t) (no kA_outer). Q_passed [J] then
+    integrates the heat leaving through the outer surface, E_wall sums C_k T_k.
 
     Given start (start="given"): the fluid starts at pressure p0 (default: the
     node guesses) and temperature T0, the wall at T_wall0 (default T0).
@@ -102,6 +112,36 @@ class Pipe(Component):
             "locate crossings of the saturation lines per volume (condensable media)",
             kind="bool",
         ),
+        Param(
+            "wall_layers",
+            "1",
+            0,
+            "radial conduction layers of the wall (0: lumped; see dnasim.components.walls)",
+            min=0,
+            max=100,
+            kind="int",
+        ),
+        Param("r_in", "m", None, "inner wall radius (layered wall)", min=0.0),
+        Param("r_out", "m", None, "outer wall radius (layered wall)", min=0.0),
+        Param("length", "m", None, "pipe length (layered wall)", min=0.0),
+        Param("wall_conductivity", "W/(m.K)", None, "wall conductivity (layered wall)", min=0.0),
+        Param(
+            "T_outer",
+            "K",
+            None,
+            "outer boundary: with kA_outer the temperature convected to, without it the "
+            "temperature of the wall's outer surface",
+            min=0.0,
+            time_function=True,
+        ),
+        Param("kA_outer", "W/K", None, "outer heat transfer coefficient times area", min=0.0),
+        Param(
+            "Q_outer",
+            "W",
+            None,
+            "heat flux into the wall through its outer surface (total over the pipe)",
+            time_function=True,
+        ),
         Param("p0", "Pa", None, "initial fluid pressure (given start)", min=0.0),
         Param("T0", "K", None, "initial fluid temperature (given start)", min=0.0),
         Param("T_wall0", "K", None, "initial wall temperature (given start), default T0", min=0.0),
@@ -123,7 +163,31 @@ class Pipe(Component):
         n = P["n_volumes"]
         if P["V"] <= 0:
             raise PlantError(f"component '{self.name}': parameter 'V' must be > 0 m3")
-        if P["C_wall"] == 0 and P["T_wall"] is None and P["kA"] > 0:
+        self.wall_model = None
+        if P["wall_layers"] or any(P[k] is not None for k in ("T_outer", "kA_outer", "Q_outer")):
+            if P["T_wall"] is not None:
+                raise PlantError(
+                    f"component '{self.name}': T_wall (a prescribed wall) excludes the wall "
+                    "model (wall_layers, T_outer, kA_outer, Q_outer); for a fixed outer "
+                    "surface temperature give T_outer"
+                )
+            from dnasim.components.walls import WallModel
+
+            self.wall_model = WallModel(
+                owner=self.name,
+                n=n,
+                C_wall=P["C_wall"],
+                layers=P["wall_layers"],
+                r_in=P["r_in"],
+                r_out=P["r_out"],
+                length=P["length"],
+                conductivity=P["wall_conductivity"],
+                T_outer=P["T_outer"],
+                kA_outer=P["kA_outer"],
+                Q_outer=P["Q_outer"],
+                param_at=self.param_at,
+            )
+        if P["C_wall"] == 0 and P["T_wall"] is None and P["kA"] > 0 and self.wall_model is None:
             raise PlantError(
                 f"component '{self.name}': with kA > 0 give either C_wall > 0 (wall storage) or "
                 "T_wall (fixed wall)"
@@ -134,7 +198,7 @@ class Pipe(Component):
         self.internal_energy = P["internal_energy"] or "outlet"
         self.fixed_wall = P["T_wall"] is not None
         # kA = 0 and no wall capacity: adiabatic pipe, the wall variable just follows the fluid
-        self.no_wall = not self.fixed_wall and P["C_wall"] == 0
+        self.no_wall = not self.fixed_wall and P["C_wall"] == 0 and self.wall_model is None
         m_reg = P["m_reg"] if P["m_reg"] is not None else M_REG_REL * max(P["m_nominal"], 1e-12)
         self.channel = Channel(
             prefix="",
@@ -202,6 +266,8 @@ class Pipe(Component):
         out = self.channel.variables(M_nom, U_nom, 1e5, 1e5, Q_nom) + [
             Variable("T_w", "K", 300.0, self.n, "wall temperature of volume i"),
         ]
+        if self.wall_model is not None:
+            out += self.wall_model.variables(300.0, Q_nom)
         if self.fixed_wall:
             out.append(
                 Variable(
@@ -217,6 +283,11 @@ class Pipe(Component):
     def equations(self):
         n, C_i = self.n, self.params["C_wall"] / self.n
         eqs = self.channel.equations()
+        if self.wall_model is not None:  # walls.py: residuals computed in prepare
+            return eqs + [
+                dataclasses.replace(e, residual=lambda t, x, xp, k=k: x.work["wall_model"][k])
+                for k, e in enumerate(self.wall_model.equations())
+            ]
         if self.fixed_wall:
             eqs.append(
                 Equation(
@@ -268,6 +339,8 @@ class Pipe(Component):
         props = self.channel.evaluate(self.medium, x)
         work = self.channel.blocks(x, xp, props, x["T_w"])
         work["T"] = props[2]
+        if self.wall_model is not None:
+            work["wall_model"] = self.wall_model.residual(t, x, xp)
         return work
 
     def outputs(self):
@@ -291,7 +364,9 @@ class Pipe(Component):
             T[-2],
             float(np.sum(x["M"])),
             float(np.sum(x["U"])),
-            float(C_i * np.sum(x["T_w"])),
+            self.wall_model.energy(x)
+            if self.wall_model is not None
+            else float(C_i * np.sum(x["T_w"])),
             float(np.sum(x["Q"])),
             float(E[0]),
             float(E[-1]),
@@ -319,7 +394,10 @@ class Pipe(Component):
         else:
             h = h_in + (x["outlet.h"] - h_in) * frac
         T = self.channel.guess(x, self.medium, p, h, P["m_nominal"])
-        if self.fixed_wall:
+        if self.wall_model is not None:
+            T_w0 = np.full(n, P["T_wall0"]) if P["T_wall0"] is not None else T
+            self.wall_model.guess(t0, x, T_w0)
+        elif self.fixed_wall:
             x["T_w"] = self.param_at("T_wall", t0)
             x["Q_passed"] = 0.0
         elif P["T_wall0"] is not None:

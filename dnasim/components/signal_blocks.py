@@ -376,8 +376,8 @@ class Table(_Block):
     """
 
     PARAMS = (
-        Param("x", "1", doc="input values x_i, strictly increasing [unit of u]", kind="list"),
-        Param("y", "1", doc="output values y_i [unit of y]", kind="list"),
+        Param("x", "1", doc="input values x_i, strictly increasing [unit of u]", kind="array"),
+        Param("y", "1", doc="output values y_i [unit of y]", kind="array"),
         _unit_param(),
     )
 
@@ -576,8 +576,8 @@ class TableSource(_Source):
     """y piecewise linear through (times_i, values_i), held flat outside."""
 
     PARAMS = (
-        Param("times", "s", doc="times, strictly increasing [s]", kind="list"),
-        Param("values", "1", doc="values [SI unit of ``unit``]", kind="list"),
+        Param("times", "s", doc="times, strictly increasing [s]", kind="array"),
+        Param("values", "1", doc="values [SI unit of ``unit``]", kind="array"),
         _source_unit(),
     )
 

@@ -1,0 +1,371 @@
+"""Condenser: a two-phase volume at saturation with a hotwell, cooled by a second stream
+or by a given duty."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from dnasim.components.base import (
+    Component,
+    Equation,
+    FluidPort,
+    Output,
+    Param,
+    SignalPort,
+    Variable,
+)
+from dnasim.components.physics import (
+    M_REG_REL,
+    G,
+    energy_in,
+    friction_dp,
+    softplus,
+    upwind_weight,
+)
+from dnasim.errors import PlantError
+
+#: width [J/kg] of the smooth min(h_v, h') of the condensate drawn from the hotwell
+H_MIN_WIDTH = 1.0
+
+
+class Condenser(Component):
+    """Steam condenser: one fully mixed volume V of water and steam in equilibrium
+    (the shell), fed by exhaust steam, drained as condensate from its hotwell, and
+    cooled by a cooling-water stream (ports cw_in, cw_out; a medium of its own) or
+    by a given duty Q(t).
+
+    Shell state p_v [Pa], h_v [J/kg] with M [kg], U [J]; saturation at p_v: h', h''
+    [J/kg], rho', rho'' [kg/m3], T_sat [K]; quality x = (h_v - h')/(h'' - h');
+    m_s [kg/s] steam in, m_c [kg/s] condensate out, Q [W] heat to the cooling water.
+
+      mass             dM/dt = m_s - m_c
+      energy           dU/dt = E_in(m_s, h_steam_node, h_v) - E_out(m_c, h_c) - Q
+      density          M = V rho(p_v, h_v)
+      internal_energy  U = M u(p_v, h_v)
+      steam_pressure   p_steam_in = p_v                         (exhaust side: the volume)
+      condensate       h_c = h' - softplus(h' - h_v)            (saturated liquid; the
+                       volume's h when it is subcooled; width 1 J/kg)
+      level            level = V_l / A_hotwell,  V_l = M (1 - x)/rho' (clipped to [0, V])  [m]
+      hotwell_pressure p_condensate_out = p_v + rho' g level     (static head of the hotwell)
+    Cooling water (cooling = "water"): counter-current against the condensing steam
+    at T_sat, no storage on the water side, m_w [kg/s], cp_w at the water inlet:
+      cw_friction      p_cw_in - p_cw_out = cw_k m_w sqrt(m_w^2 + m_reg^2)/rho_w
+                       (cw_k from cw_dp_nominal at cw_m_nominal when not given)
+      cw_outlet        h_w2 = h_w1 + eps cp_w (T_sat - T_w1),  eps = 1 - exp(-NTU),
+                       NTU = UA / (cp_w sqrt(m_w^2 + m_reg^2))      (epsilon-NTU, C_r = 0)
+      heat             Q = w(m_w) (h_w2 - h_w1)        (= m_w (h_w2 - h_w1) for m_w > m_eps)
+    Given duty (cooling = "duty"):
+      heat             Q = Q(t)
+      heat_passed      dQ_passed/dt = Q      (the heat leaving the plant [J], for balances)
+
+    Fluid leaves the shell through the steam port (reverse flow) with h_v and
+    through the condensate port with h_c; cooling water leaves at cw_out with h_w2
+    and, on reverse flow, at cw_in with the cw_out node's h (not heated). The
+    energy flows balance exactly: d(U)/dt + (water side out - in) = E_steam - E_c.
+    Signal outputs: p (shell pressure), level, Q, T_sat.
+
+    Given start (start = "given"): pressure p0 and hotwell level level0 (default
+    0.2 V / A_hotwell); the shell is saturated liquid below the level and saturated
+    steam above it. A steady start fixes the level only through the hotwell's
+    static head (weakly): prefer a given start or a level controller. Keep the
+    hotwell from running dry: with no liquid left (x >= 1) the level is 0 but the
+    condensate port still delivers saturated liquid h'.
+    """
+
+    PARAMS = (
+        Param("V", "m3", doc="shell volume (steam space and hotwell)", min=0.0),
+        Param("A_hotwell", "m2", doc="free surface of the hotwell", min=0.0),
+        Param(
+            "cooling",
+            "1",
+            "water",
+            "cooling-water stream (ports cw_in, cw_out) or a given duty Q",
+            kind="string",
+            choices=("water", "duty"),
+        ),
+        Param("UA", "W/K", None, "overall heat transfer coefficient times area", min=0.0),
+        Param("cw_k", "1/m4", None, "cooling-water friction coefficient", min=0.0),
+        Param(
+            "cw_dp_nominal",
+            "delta_Pa",
+            5e4,
+            "cooling-water pressure drop at cw_m_nominal (when cw_k is not given)",
+            min=0.0,
+        ),
+        Param("cw_m_nominal", "kg/s", 100.0, "typical cooling-water flow", min=0.0),
+        Param("Q", "W", None, "heat removed (cooling = 'duty')", time_function=True),
+        Param("p0", "Pa", None, "initial shell pressure (given start)", min=0.0),
+        Param("level0", "m", None, "initial hotwell level (given start)", min=0.0),
+        Param("m_nominal", "kg/s", 1.0, "typical steam flow (scales and tolerances)", min=0.0),
+        Param("medium", "1", None, "fluid of the shell (default: from the network)", kind="string"),
+        Param(
+            "cw_medium",
+            "1",
+            None,
+            "cooling-water fluid (default: from the network)",
+            kind="string",
+        ),
+    )
+    FLUID_PORTS = (
+        FluidPort("steam_in", "inlet", "m_s", "storage", "exhaust steam in (pressure = shell's)"),
+        FluidPort("condensate_out", "outlet", "m_c", "storage", "condensate out of the hotwell"),
+        FluidPort("cw_in", "inlet", "m_w", "resistance", "cooling water in (cooling = 'water')"),
+        FluidPort("cw_out", "outlet", "m_w", "resistance", "cooling water out"),
+    )
+    SIGNAL_OUTPUTS = (
+        SignalPort("p", "Pa", "shell pressure", variable="p_v"),
+        SignalPort("level", "m", "hotwell level", variable="level"),
+        SignalPort("Q", "W", "heat removed", variable="Q"),
+        SignalPort("T_sat", "K", "saturation temperature of the shell", variable="T_sat"),
+    )
+
+    def setup(self):
+        P = self.params
+        name = f"component '{self.name}' (Condenser)"
+        self.water = P["cooling"] == "water"
+        if self.water and P["UA"] is None:
+            raise PlantError(f"{name}: cooling = 'water' needs UA [W/K]")
+        if not self.water and P["Q"] is None:
+            raise PlantError(f"{name}: cooling = 'duty' needs the duty Q [W]")
+        if P["level0"] is not None and P["level0"] * P["A_hotwell"] > P["V"]:
+            raise PlantError(f"{name}: level0 A_hotwell exceeds the volume V")
+        mw = P["cw_m_nominal"]
+        self.m_reg_w = M_REG_REL * mw
+        self.cw_k = P["cw_k"]  # with cw_dp_nominal: k = dp_nom rho / m_nom^2, rho at run time
+
+    def fluid_ports(self):
+        eps = self.m_eps
+        out = [
+            FluidPort("steam_in", "inlet", "m_s", "storage", h_out="h_v", m_eps=eps),
+            FluidPort("condensate_out", "outlet", "m_c", "storage", h_out="h_c", m_eps=eps),
+        ]
+        if self.water:
+            eps_w = M_EPS_W * self.params["cw_m_nominal"]
+            param = "cw_k" if self.cw_k is not None else "cw_dp_nominal"
+            out += [
+                FluidPort(
+                    "cw_in",
+                    "inlet",
+                    "m_w",
+                    "resistance",
+                    h_out="cw_out.h",
+                    h_source=False,
+                    pressure_param=param,
+                    m_eps=eps_w,
+                ),
+                FluidPort(
+                    "cw_out",
+                    "outlet",
+                    "m_w",
+                    "resistance",
+                    h_out="h_w2",
+                    h_source=False,
+                    pressure_param=param,
+                    m_eps=eps_w,
+                ),
+            ]
+        return out
+
+    def medium_groups(self):
+        groups = [("shell", "medium", ["steam_in", "condensate_out"])]
+        if self.water:
+            groups.append(("cooling", "cw_medium", ["cw_in", "cw_out"]))
+        return groups
+
+    @property
+    def shell_medium(self):
+        return self.port_media.get("steam_in", self.medium)
+
+    @property
+    def water_medium(self):
+        return self.port_media.get("cw_in", self.medium)
+
+    def variables(self):
+        P = self.params
+        mn, mw = P["m_nominal"], P["cw_m_nominal"]
+        M_nom = P["V"] * 10.0
+        out = [
+            Variable("m_s", "kg/s", mn, doc="steam flow in"),
+            Variable("m_c", "kg/s", mn, doc="condensate flow out"),
+            Variable("M", "kg", M_nom, doc="mass in the shell"),
+            Variable("U", "J", M_nom * 1e5, doc="internal energy in the shell"),
+            Variable("p_v", "Pa", 1e4, doc="shell pressure"),
+            Variable("h_v", "J/kg", 1e5, doc="specific enthalpy of the shell's mixture"),
+            Variable("h_c", "J/kg", 1e5, doc="enthalpy of the condensate drawn"),
+            Variable("level", "m", 1.0, doc="hotwell level"),
+            Variable("T_sat", "K", 300.0, doc="saturation temperature of the shell"),
+            Variable("Q", "W", max(mn * 2e6, 1.0), doc="heat removed"),
+        ]
+        if self.water:
+            out += [
+                Variable("m_w", "kg/s", mw, doc="cooling-water flow"),
+                Variable("h_w2", "J/kg", 1e5, doc="cooling-water outlet enthalpy"),
+            ]
+        else:
+            out.append(
+                Variable(
+                    "Q_passed",
+                    "J",
+                    max(mn * 2e6, 1.0),
+                    doc="heat removed, integral of Q dt",
+                    accumulator=True,
+                )
+            )
+        return out
+
+    def equations(self):
+        shell = ("p_v", "h_v")
+        eqs = [
+            Equation("mass", y=("m_s", "m_c"), yp=("M",), unit="kg/s"),
+            Equation(
+                "energy",
+                y=("m_s", "m_c", "steam_in.h", "h_v", "condensate_out.h", "h_c", "Q"),
+                yp=("U",),
+                unit="W",
+            ),
+            Equation("density", y=("M",) + shell, unit="kg"),
+            Equation("internal_energy", y=("U", "M") + shell, unit="J"),
+            Equation("steam_pressure", y=("steam_in.p", "p_v"), unit="Pa"),
+            Equation("condensate", y=("h_c",) + shell, unit="J/kg"),
+            Equation("level", y=("level", "M") + shell, unit="m"),
+            Equation("hotwell_pressure", y=("condensate_out.p", "level") + shell, unit="Pa"),
+            Equation("saturation", y=("T_sat", "p_v"), unit="K"),
+        ]
+        if self.water:
+            cw = ("m_w", "cw_in.p", "cw_in.h", "cw_out.p", "cw_out.h")
+            eqs += [
+                Equation("cw_friction", y=cw, unit="Pa"),
+                Equation("cw_outlet", y=("h_w2", "T_sat") + cw, unit="J/kg"),
+                Equation("heat", y=("Q", "m_w", "h_w2", "cw_in.h"), unit="W"),
+            ]
+        else:
+            eqs += [
+                Equation("heat", y=("Q",), unit="W"),
+                Equation("heat_passed", y=("Q",), yp=("Q_passed",), unit="W"),
+            ]
+        return eqs
+
+    # --------------------------------------------------------------- physics
+    def saturation(self, p):
+        """(h', h'', rho', rho'', T_sat) at the shell pressure p [Pa]."""
+        medium = self.shell_medium
+        hl, hv = medium.saturation_enthalpies(np.array([p]))
+        hl, hv = float(hl[0]), float(hv[0])
+        if not (math.isfinite(hl) and math.isfinite(hv)):
+            from dnasim.media.errors import PropertyError
+
+            raise PropertyError(
+                medium.label, p, math.nan, "saturation", "condenser pressure above critical"
+            )
+        sl, sv = medium.state(p, hl), medium.state(p, hv)
+        return hl, hv, sl.rho, sv.rho, sl.T
+
+    def liquid_volume(self, M, h, hl, hv, rho_l):
+        """V_l [m3] = M (1 - x)/rho', x = (h - h')/(h'' - h'), clipped to [0, V]."""
+        x = (h - hl) / (hv - hl)
+        V_l = M * (1.0 - x) / rho_l
+        return min(max(V_l, 0.0), self.params["V"])
+
+    def residual(self, t, x, xp):
+        P = self.params
+        p, h = x["p_v"], x["h_v"]
+        st = self.shell_medium.state(p, h)
+        hl, hv, rho_l, _, T_sat = self.saturation(p)
+        eps = self.m_eps
+        E = energy_in(x["m_s"], x["steam_in.h"], h, eps) + energy_in(
+            -x["m_c"], x["condensate_out.h"], x["h_c"], eps
+        )
+        level = self.liquid_volume(x["M"], h, hl, hv, rho_l) / P["A_hotwell"]
+        r = [
+            xp["M"] - (x["m_s"] - x["m_c"]),
+            xp["U"] - (float(E) - x["Q"]),
+            x["M"] - P["V"] * st.rho,
+            x["U"] - x["M"] * st.u,
+            x["steam_in.p"] - p,
+            x["h_c"] - (hl - float(softplus(hl - h, H_MIN_WIDTH))),
+            x["level"] - level,
+            x["condensate_out.p"] - (p + rho_l * G * x["level"]),
+            x["T_sat"] - T_sat,
+        ]
+        if self.water:
+            r += self.water_residuals(x)
+        else:
+            r += [x["Q"] - self.param_at("Q", t), xp["Q_passed"] - x["Q"]]
+        return np.array(r)
+
+    def water_residuals(self, x):
+        mw = x["m_w"]
+        medium = self.water_medium
+        s1 = medium.state(x["cw_in.p"], x["cw_in.h"])
+        s2 = medium.state(x["cw_out.p"], x["cw_out.h"])
+        rho = s1.rho if mw >= 0 else s2.rho
+        k = self.cw_k
+        if k is None:
+            P = self.params
+            k = P["cw_dp_nominal"] * s1.rho / P["cw_m_nominal"] ** 2
+        dh = self.water_heating(mw, s1, x["T_sat"])
+        return [
+            x["cw_in.p"] - x["cw_out.p"] - friction_dp(k, mw, rho, self.m_reg_w),
+            x["h_w2"] - (x["cw_in.h"] + dh),
+            x["Q"]
+            - float(upwind_weight(mw, M_EPS_W * self.params["cw_m_nominal"]))
+            * (x["h_w2"] - x["cw_in.h"]),
+        ]
+
+    def water_heating(self, mw, s1, T_sat):
+        """eps cp_w (T_sat - T_w1) [J/kg], the epsilon-NTU rise of the water's enthalpy."""
+        m_abs = math.sqrt(mw * mw + self.m_reg_w * self.m_reg_w)
+        ntu = self.params["UA"] / (s1.cp * m_abs)
+        return -math.expm1(-ntu) * s1.cp * (T_sat - s1.T)
+
+    def outputs(self):
+        return [
+            Output("x", "1", "quality of the shell's mixture"),
+            Output("M_total", "kg", "mass in the shell"),
+            Output("U_total", "J", "internal energy in the shell"),
+        ]
+
+    def output_values(self, t, x, xp):
+        hl, hv, _, _, _ = self.saturation(x["p_v"])
+        return [(x["h_v"] - hl) / (hv - hl), x["M"], x["U"]]
+
+    # ---------------------------------------------------------- initialisation
+    def guess_nodes(self, t0):
+        p0 = self.params["p0"]
+        if p0 is None:
+            return {}
+        hl, _ = self.shell_medium.saturation_enthalpies(np.array([p0]))
+        return {"steam_in": (p0, None), "condensate_out": (p0, float(hl[0]))}
+
+    def initial_guess(self, t0, x):
+        P = self.params
+        p = P["p0"] if P["p0"] is not None else x["steam_in.p"]
+        hl, hv, rho_l, rho_v, T_sat = self.saturation(p)
+        level = P["level0"] if P["level0"] is not None else 0.2 * P["V"] / P["A_hotwell"]
+        V_l = min(level * P["A_hotwell"], P["V"])
+        M = rho_l * V_l + rho_v * (P["V"] - V_l)
+        h = (rho_l * V_l * hl + rho_v * (P["V"] - V_l) * hv) / M
+        x["p_v"], x["h_v"], x["M"] = p, h, M
+        x["U"] = M * self.shell_medium.state(p, h).u
+        x["h_c"] = hl
+        x["level"] = V_l / P["A_hotwell"]
+        x["T_sat"] = T_sat
+        x["steam_in.p"] = p
+        x["condensate_out.p"] = p + rho_l * G * x["level"]
+        x["condensate_out.h"] = hl
+        mn = P["m_nominal"]
+        x["m_s"] = x["m_c"] = mn
+        if self.water:
+            x["m_w"] = P["cw_m_nominal"]
+            s1 = self.water_medium.state(x["cw_in.p"], x["cw_in.h"])
+            x["h_w2"] = x["cw_in.h"] + self.water_heating(x["m_w"], s1, T_sat)
+            x["Q"] = x["m_w"] * (x["h_w2"] - x["cw_in.h"])
+        else:
+            x["Q"] = self.param_at("Q", t0)
+            x["Q_passed"] = 0.0
+
+
+#: upwind band of the cooling-water ports, relative to cw_m_nominal
+M_EPS_W = 1e-3

@@ -1,0 +1,340 @@
+"""Pump: a centrifugal pump with a quadratic head curve, affinity laws and an efficiency."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from dnasim.components.base import (
+    Component,
+    Equation,
+    FluidPort,
+    Param,
+    SignalPort,
+    Variable,
+)
+from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean, upwind_weight
+from dnasim.errors import PlantError
+
+
+class Pump(Component):
+    """Centrifugal pump between ``inlet`` and ``outlet``, no storage.
+
+    Symbols: m [kg/s] mass flow (inlet -> outlet positive), rho [kg/m3] the
+    density of the fluid entering (inlet node for m > 0, outlet node for m < 0,
+    smooth upwind), Q = m/rho [m3/s] volume flow, r = n/n_0 [-] the relative
+    speed (parameter ``speed`` or signal input ``n``), H [m] head, eta [-]
+    efficiency, g = 9.80665 m/s2.
+
+      head      H = H0 r^2 + a r Q + b Q sqrt(Q^2 + Q_reg^2)                     [m]
+                (affinity laws: H(Q, r) = r^2 H_1(Q/r) for the nominal-speed curve
+                H_1(q) = H0 + a q + b q|q|; b < 0)
+      pressure  p_out - p_in = rho g H                                            [Pa]
+      enthalpy  h_2 = h_in + softplus(p_out - p_in, dp_reg) / (rho eta)           [J/kg]
+      power     P = w(m) (h_2 - h_in)     (shaft power; = m dp/(rho eta) for m > m_eps) [W]
+      work      dW/dt = P      (W [J]: shaft work over the run, for energy balances)
+      eta       eta = eta (constant), or eta_1(Q/r) from the table eta_Q, eta_values at
+                nominal speed (affinity: similar points have equal efficiency),
+                PCHIP-interpolated, held at the end values, and at least eta_min.
+
+    The curve is given in one of three ways: ``H0`` with ``a``, ``b`` (coefficients);
+    ``H0`` with ``H_nominal`` at ``Q_nominal`` (a = 0, b = (H_nominal - H0)/Q_nominal^2);
+    or the points ``curve_Q`` [m3/s], ``curve_H`` [m] at nominal speed (least-squares
+    quadratic H0 + a q + b q^2, exact through three points).
+
+    Tabulated head (head_curve = "table", points curve_Q from 0 up, curve_H):
+      H_1(q) = PCHIP through the points for 0 <= q <= q_e (the last point),
+      H(Q, r) = r^2 H_1(Q/r)                                   0 <= Q <= r q_e
+              = r^2 H_e + s_e r (Q - r q_e) + b D sqrt(D^2 + Q_reg^2),  D = Q - r q_e > 0
+              = r^2 H_1(0) + s_0 r Q + b Q sqrt(Q^2 + Q_reg^2)         Q < 0
+      (s_0, s_e [m s/m3] the table's end slopes, b the least-squares quadratic's
+      curvature: beyond the table the curve continues as a parabola, so that the
+      affinity law stays defined down to r = 0, where it is the same resistance.)
+
+    No-flow and reverse flow: at Q = 0 the head is the shut-off head H0 r^2; the
+    term b Q sqrt(Q^2 + Q_reg^2) (Q_reg = 1e-2 m_nominal/rho) keeps dH/dQ < 0 at
+    Q = 0, so a pump against a closed valve or between two fixed pressures stays
+    index 1. A stopped pump (r = 0) is the resistance p_out - p_in = rho g b Q|Q|
+    in both directions. Fluid leaving through the inlet (reverse flow) carries the
+    outlet node's enthalpy (no work is exchanged with reverse flow); fluid leaving
+    through the outlet carries h_2. The energy flows at the ports and P balance
+    exactly: E_out - E_in = P. When p_out < p_in (a stopped pump, or flow beyond
+    the curve's run-out) the smooth max (softplus, width dp_reg) makes the flow
+    isenthalpic instead of cooling it. At zero flow the shaft power is zero: the
+    shut-off power of a real pump (heating the trapped water) is not modelled.
+    """
+
+    PARAMS = (
+        Param("H0", "m", None, "shut-off head at nominal speed (Q = 0)", min=0.0),
+        Param("a", "s/m2", 0.0, "linear coefficient of the head curve [m per m3/s]"),
+        Param("b", "s2/m5", None, "quadratic coefficient of the head curve (< 0)"),
+        Param("H_nominal", "m", None, "head at Q_nominal and nominal speed", min=0.0),
+        Param("Q_nominal", "m3/s", None, "volume flow of the nominal point", min=0.0),
+        Param(
+            "curve_Q",
+            "m3/s",
+            None,
+            "volume flows of head-curve points (nominal speed)",
+            kind="array",
+        ),
+        Param("curve_H", "m", None, "heads of the head-curve points", kind="array"),
+        Param(
+            "head_curve",
+            "1",
+            "quadratic",
+            "the points as a least-squares quadratic, or a table (PCHIP)",
+            kind="string",
+            choices=("quadratic", "table"),
+        ),
+        Param(
+            "speed",
+            "1",
+            None,
+            "relative speed n/n_0 (otherwise from the signal input 'n')",
+            min=0.0,
+            time_function=True,
+        ),
+        Param("eta", "1", 0.8, "efficiency (when no table is given)", min=0.0, max=1.0),
+        Param(
+            "eta_Q",
+            "m3/s",
+            None,
+            "volume flows of the efficiency table (nominal speed)",
+            kind="array",
+        ),
+        Param("eta_values", "1", None, "efficiencies of the table", min=0.0, max=1.0, kind="array"),
+        Param("eta_min", "1", 0.05, "lower limit of the efficiency", min=1e-6, max=1.0),
+        Param(
+            "dp_reg",
+            "delta_Pa",
+            100.0,
+            "width of the smooth max(dp, 0) in the enthalpy rise",
+            min=0.0,
+        ),
+        Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
+        Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
+    )
+    FLUID_PORTS = (
+        FluidPort("inlet", "inlet", "m", "resistance", "suction"),
+        FluidPort("outlet", "outlet", "m", "resistance", "discharge (h_2 on forward flow)"),
+    )
+    SIGNAL_INPUTS = (SignalPort("n", "1", "relative speed n/n_0 (when 'speed' is not given)"),)
+    SIGNAL_OUTPUTS = (
+        SignalPort("P", "W", "shaft power", variable="P"),
+        SignalPort("H", "m", "head", variable="H"),
+    )
+
+    # ------------------------------------------------------------------ set-up
+    def setup(self):
+        P = self.params
+        self.speed_from_signal = P["speed"] is None
+        self.H0, self.a, self.b = self._curve()
+        self._head_table = None
+        if P["head_curve"] == "table":
+            self._head_table = self._table()
+        if not self.b < 0:
+            raise PlantError(
+                f"component '{self.name}' (Pump): the head curve's quadratic coefficient b = "
+                f"{self.b:g} s2/m5 must be < 0 (the head must fall with the flow)"
+            )
+        self._eta_table = None
+        if (P["eta_Q"] is None) != (P["eta_values"] is None):
+            raise PlantError(
+                f"component '{self.name}' (Pump): give both 'eta_Q' and 'eta_values' for an "
+                "efficiency table"
+            )
+        if P["eta_Q"] is not None:
+            q, e = np.asarray(P["eta_Q"]), np.asarray(P["eta_values"])
+            if q.size != e.size or q.size < 2 or np.any(np.diff(q) <= 0):
+                raise PlantError(
+                    f"component '{self.name}' (Pump): 'eta_Q' must rise strictly and have as "
+                    "many (at least 2) entries as 'eta_values'"
+                )
+            from scipy.interpolate import PchipInterpolator
+
+            self._eta_table = (PchipInterpolator(q, e), q[0], q[-1])
+        elif P["eta"] <= 0:
+            raise PlantError(f"component '{self.name}' (Pump): parameter 'eta' must be > 0")
+
+    def _curve(self):
+        """(H0 [m], a [s/m2], b [s2/m5]) from whichever way the curve was given."""
+        P = self.params
+        name = f"component '{self.name}' (Pump)"
+        if P["curve_Q"] is not None or P["curve_H"] is not None:
+            if P["curve_Q"] is None or P["curve_H"] is None:
+                raise PlantError(f"{name}: give both 'curve_Q' and 'curve_H'")
+            q, h = np.asarray(P["curve_Q"]), np.asarray(P["curve_H"])
+            if q.size != h.size or q.size < 3 or np.unique(q).size < 3:
+                raise PlantError(
+                    f"{name}: 'curve_Q' and 'curve_H' need the same number (at least 3) of "
+                    "points at distinct flows"
+                )
+            b, a, H0 = np.polyfit(q, h, 2)
+            return float(H0), float(a), float(b)
+        if P["H0"] is None:
+            raise PlantError(
+                f"{name}: give the head curve: H0 with b (and a), H0 with H_nominal and "
+                "Q_nominal, or the points curve_Q, curve_H"
+            )
+        if P["b"] is not None:
+            return P["H0"], P["a"], P["b"]
+        if P["H_nominal"] is None or P["Q_nominal"] is None:
+            raise PlantError(f"{name}: with H0 give b, or H_nominal and Q_nominal")
+        return P["H0"], 0.0, (P["H_nominal"] - P["H0"]) / P["Q_nominal"] ** 2
+
+    def _table(self):
+        """(PCHIP H_1, q_e [m3/s], H_e [m], s_0, s_e [m s/m3]) of a tabulated head curve."""
+        name = f"component '{self.name}' (Pump)"
+        if self.params["curve_Q"] is None:
+            raise PlantError(f"{name}: head_curve = 'table' needs the points curve_Q, curve_H")
+        q, h = np.asarray(self.params["curve_Q"]), np.asarray(self.params["curve_H"])
+        if q[0] != 0.0 or np.any(np.diff(q) <= 0):
+            raise PlantError(
+                f"{name}: the head table's curve_Q must start at 0 (shut-off) and rise strictly"
+            )
+        from scipy.interpolate import PchipInterpolator
+
+        f = PchipInterpolator(q, h)
+        d = f.derivative()
+        return f, float(q[-1]), float(h[-1]), float(d(0.0)), float(d(q[-1]))
+
+    def fluid_ports(self):
+        eps = self.m_eps
+        return [
+            FluidPort(
+                "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=eps
+            ),
+            FluidPort(
+                "outlet", "outlet", "m", "resistance", h_out="h_2", h_source=False, m_eps=eps
+            ),
+        ]
+
+    def signal_inputs(self):
+        return list(self.SIGNAL_INPUTS) if self.speed_from_signal else []
+
+    def variables(self):
+        mn = self.params["m_nominal"]
+        return [
+            Variable("m", "kg/s", mn, doc="mass flow, inlet -> outlet"),
+            Variable("H", "m", max(self.H0, 1.0), doc="head"),
+            Variable("h_2", "J/kg", 1e5, doc="enthalpy of the fluid leaving at the outlet"),
+            Variable("P", "W", max(mn * G * self.H0, 1.0), doc="shaft power"),
+            Variable(
+                "W",
+                "J",
+                max(mn * 1e5, 1.0),
+                doc="shaft work done on the fluid, integral of P dt",
+                accumulator=True,
+            ),
+        ]
+
+    def equations(self):
+        n = ("n",) if self.speed_from_signal else ()
+        nodes = ("inlet.p", "inlet.h", "outlet.p", "outlet.h")
+        return [
+            Equation(
+                "head",
+                y=("H", "m") + nodes + n,
+                unit="m",
+                doc="H = H0 r^2 + a r Q + b Q sqrt(Q^2 + Q_reg^2)",
+                residual=self._head,
+            ),
+            Equation(
+                "pressure",
+                y=("H", "m") + nodes,
+                unit="Pa",
+                doc="p_out - p_in = rho g H",
+                residual=self._pressure,
+            ),
+            Equation(
+                "enthalpy",
+                y=("h_2", "m") + nodes + n,
+                unit="J/kg",
+                doc="h_2 = h_in + softplus(p_out - p_in)/(rho eta)",
+                residual=self._enthalpy,
+            ),
+            Equation(
+                "power",
+                y=("P", "m", "h_2", "inlet.h"),
+                unit="W",
+                doc="P = w(m) (h_2 - h_in)",
+                residual=lambda t, x, xp: (
+                    x["P"] - float(upwind_weight(x["m"], self.m_eps)) * (x["h_2"] - x["inlet.h"])
+                ),
+            ),
+            Equation(
+                "work",
+                y=("P",),
+                yp=("W",),
+                unit="W",
+                doc="dW/dt = P",
+                residual=lambda t, x, xp: xp["W"] - x["P"],
+            ),
+        ]
+
+    # --------------------------------------------------------------- physics
+    def speed(self, t, x):
+        """Relative speed r = n/n_0 [-]."""
+        return x["n"] if self.speed_from_signal else self.param_at("speed", t)
+
+    def density(self, x):
+        """Density of the fluid entering the pump [kg/m3] (smooth upwind by m)."""
+        medium = self.medium
+        rho_in = medium.state(x["inlet.p"], x["inlet.h"]).rho
+        rho_out = medium.state(x["outlet.p"], x["outlet.h"]).rho
+        return float(upwind_mean(x["m"], rho_in, rho_out, self.m_eps))
+
+    def head(self, Q, r, rho):
+        """H(Q, r) [m] at volume flow Q [m3/s], relative speed r, density rho [kg/m3]."""
+        Q_reg = M_REG_REL * self.params["m_nominal"] / rho
+        b = self.b
+        if self._head_table is None:
+            return self.H0 * r * r + self.a * r * Q + b * Q * np.sqrt(Q * Q + Q_reg * Q_reg)
+        f, q_e, H_e, s_0, s_e = self._head_table
+        if Q < 0.0:
+            return r * r * float(f(0.0)) + s_0 * r * Q + b * Q * math.sqrt(Q * Q + Q_reg * Q_reg)
+        D = Q - r * q_e
+        if D > 0.0:
+            return r * r * H_e + s_e * r * D + b * D * math.sqrt(D * D + Q_reg * Q_reg)
+        return r * r * float(f(Q / r)) if r > 0.0 else 0.0
+
+    def efficiency(self, Q, r):
+        """eta(Q, r) [-]: constant, or the table at the similar point Q/r."""
+        eta_min = self.params["eta_min"]
+        if self._eta_table is None:
+            return max(self.params["eta"], eta_min)
+        f, q0, q1 = self._eta_table
+        q = min(max(Q / max(r, 1e-3), q0), q1)
+        return max(float(f(q)), eta_min)
+
+    def _head(self, t, x, xp):
+        rho = self.density(x)
+        return x["H"] - self.head(x["m"] / rho, self.speed(t, x), rho)
+
+    def _pressure(self, t, x, xp):
+        return x["outlet.p"] - x["inlet.p"] - self.density(x) * G * x["H"]
+
+    def _enthalpy(self, t, x, xp):
+        rho = self.density(x)
+        eta = self.efficiency(x["m"] / rho, self.speed(t, x))
+        dp = float(softplus(x["outlet.p"] - x["inlet.p"], self.params["dp_reg"]))
+        return x["h_2"] - x["inlet.h"] - dp / (rho * eta)
+
+    def initial_guess(self, t0, x):
+        mn = self.params["m_nominal"]
+        r = self.param_at("speed", t0) if not self.speed_from_signal else 1.0
+        try:
+            rho = self.medium.state(x["inlet.p"], x["inlet.h"]).rho
+        except Exception:
+            rho = 1000.0
+        H = self.head(mn / rho, r, rho)
+        x["m"] = mn
+        x["H"] = H
+        dh = max(rho * G * H, 0.0) / (rho * self.efficiency(mn / rho, r))
+        x["h_2"] = x["inlet.h"] + dh
+        x["P"] = mn * dh
+        x["W"] = 0.0
+        # the discharge node: the pump's pressure rise on the suction guess
+        x["outlet.p"] = max(x["inlet.p"] + rho * G * H, x["inlet.p"])
+        x["outlet.h"] = x["h_2"]
