@@ -148,11 +148,22 @@ def signals_plant():
     return plant
 
 
+def plant_file(name):
+    """A plant of tests/plants (the fluid machines, valves and the condenser)."""
+    from pathlib import Path
+
+    from dnasim.plantfile import load
+
+    return load(Path(__file__).parent / "plants" / name).plant
+
+
 PLANTS = {
     "air_pipe": lambda: air_pipe_plant(3),
     "attemperator": attemperator_plant,
     "hx": hx_plant,
     "signals": signals_plant,
+    "turbine_condenser": lambda: plant_file("turbine_condenser.toml"),
+    "pump_check_valve": lambda: plant_file("pump_trip_check_valve.toml"),
 }
 
 

@@ -75,10 +75,10 @@ class Pump(Component):
             "curve_Q",
             "m3/s",
             None,
-            "volume flows of head-curve points (nominal speed)",
+            "volume flows [m3/s] of head-curve points (nominal speed)",
             kind="array",
         ),
-        Param("curve_H", "m", None, "heads of the head-curve points", kind="array"),
+        Param("curve_H", "m", None, "heads [m] of the head-curve points", kind="array"),
         Param(
             "head_curve",
             "1",
@@ -100,10 +100,12 @@ class Pump(Component):
             "eta_Q",
             "m3/s",
             None,
-            "volume flows of the efficiency table (nominal speed)",
+            "volume flows [m3/s] of the efficiency table (nominal speed)",
             kind="array",
         ),
-        Param("eta_values", "1", None, "efficiencies of the table", min=0.0, max=1.0, kind="array"),
+        Param(
+            "eta_values", "1", None, "efficiencies [-] of the table", min=0.0, max=1.0, kind="array"
+        ),
         Param("eta_min", "1", 0.05, "lower limit of the efficiency", min=1e-6, max=1.0),
         Param(
             "dp_reg",
