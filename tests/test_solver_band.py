@@ -181,12 +181,13 @@ def test_restart_step_from_the_solution_saves_steps_after_a_tstop():
         return np.exp(-t) if t < 5 else 1.0 + (np.exp(-5.0) - 1.0) * np.exp(-(t - 5.0))
 
     steps = {}
+    default = bdf.RESTART_FROM_SOLUTION
     for mode in (False, True):
         bdf.RESTART_FROM_SOLUTION = mode
         try:
             r = solve_dae(residual, (0.0, 10.0), [1.0], [-1.0], rtol=1e-6, atol=1e-9, tstops=[5.0])
         finally:
-            bdf.RESTART_FROM_SOLUTION = True
+            bdf.RESTART_FROM_SOLUTION = default
         assert abs(r.y[0, -1] - exact(10.0)) <= 1e-5
         steps[mode] = int(np.sum(r.t > 5.0))
     assert steps[True] < steps[False]
