@@ -9,6 +9,7 @@ import scipy.sparse as sp
 
 from dnasim.solver import bdf, solve_dae
 from dnasim.solver.band import BandLU, BandOrdering
+from dnasim.solver import linear_algebra
 from dnasim.solver.linear_algebra import IterationMatrix
 
 EPS = np.finfo(float).eps
@@ -75,8 +76,9 @@ def test_iteration_matrix_stores_the_pattern_only_and_uses_the_band():
         return f[pr]
 
     m = IterationMatrix(residual, n, sparsity=pattern)
-    # exactly the pattern of dF/dy + dF/dy': no identity added (it stored zeros)
-    assert m.pattern.nnz == pattern.nnz
+    # the pattern of dF/dy + dF/dy', plus the diagonal only while KEEP_DIAGONAL is on
+    expected = pattern + sp.eye(n) if linear_algebra.KEEP_DIAGONAL else pattern
+    assert m.pattern.nnz == sp.csc_matrix(expected).nnz
     assert m.band is not None
     y, yp = np.ones(n), np.zeros(n)
     f0 = residual(0.0, y, yp)
