@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from dnasim.solver import bdf, solve_dae
+from dnasim.solver import bdf, linear_algebra, solve_dae
 from dnasim.solver.band import BandLU, BandOrdering
-from dnasim.solver import linear_algebra
 from dnasim.solver.linear_algebra import IterationMatrix
 
 EPS = np.finfo(float).eps
