@@ -10,8 +10,8 @@ yields the column of dF/dy + cj dF/dy' directly (u: unit round-off, w: the
 error weights). With a sparsity pattern the columns are grouped so that no two
 columns of a group share a row (greedy colouring of the column intersection
 graph, Curtis-Powell-Reid); each group costs one residual evaluation. The
-pattern is exactly that of dF/dy + dF/dy' (no identity added: it only stored
-zeros, and SuperLU got slower with them). The matrix is factorised by LAPACK's
+pattern is that of dF/dy + dF/dy' plus the diagonal (``KEEP_DIAGONAL``: the
+stored zeros are still needed, see there). The matrix is factorised by LAPACK's
 band LU when the pattern, matched and reverse-Cuthill-McKee ordered, is banded
 (``dnasim.solver.band``, with the rule for the choice), by sparse LU (SuperLU via
 scipy.sparse.linalg.splu) otherwise. Without a pattern the matrix is dense and
