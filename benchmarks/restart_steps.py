@@ -61,6 +61,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("plants", nargs="*", default=PLANTS)
     args = ap.parse_args(argv)
+    default = bdf.RESTART_FROM_SOLUTION
     head = (
         f"{'plant':<22} {'restart h':<13} {'steps':>6} {'rej e/N':>8} {'F evals':>8} "
         f"{'CPU s':>7} {'last row change':>16}"
@@ -83,7 +84,7 @@ def main(argv=None) -> int:
                     f"{path.stem:<22} {label:<13} {r['steps']:>6} {r['rej']:>8} {r['fevals']:>8} "
                     f"{r['cpu']:>7.2f} {change:>16.1e}" + ("" if r["ok"] else "  FAILED")
                 )
-    bdf.RESTART_FROM_SOLUTION = True
+    bdf.RESTART_FROM_SOLUTION = default
     return 0
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from dnasim.solver import bdf, solve_dae
+from dnasim.solver import bdf, linear_algebra, solve_dae
 from dnasim.solver.band import BandLU, BandOrdering
 from dnasim.solver.linear_algebra import IterationMatrix
 
@@ -75,8 +75,9 @@ def test_iteration_matrix_stores_the_pattern_only_and_uses_the_band():
         return f[pr]
 
     m = IterationMatrix(residual, n, sparsity=pattern)
-    # exactly the pattern of dF/dy + dF/dy': no identity added (it stored zeros)
-    assert m.pattern.nnz == pattern.nnz
+    # the pattern of dF/dy + dF/dy', plus the diagonal only while KEEP_DIAGONAL is on
+    expected = pattern + sp.eye(n) if linear_algebra.KEEP_DIAGONAL else pattern
+    assert m.pattern.nnz == sp.csc_matrix(expected).nnz
     assert m.band is not None
     y, yp = np.ones(n), np.zeros(n)
     f0 = residual(0.0, y, yp)
@@ -181,12 +182,13 @@ def test_restart_step_from_the_solution_saves_steps_after_a_tstop():
         return np.exp(-t) if t < 5 else 1.0 + (np.exp(-5.0) - 1.0) * np.exp(-(t - 5.0))
 
     steps = {}
+    default = bdf.RESTART_FROM_SOLUTION
     for mode in (False, True):
         bdf.RESTART_FROM_SOLUTION = mode
         try:
             r = solve_dae(residual, (0.0, 10.0), [1.0], [-1.0], rtol=1e-6, atol=1e-9, tstops=[5.0])
         finally:
-            bdf.RESTART_FROM_SOLUTION = True
+            bdf.RESTART_FROM_SOLUTION = default
         assert abs(r.y[0, -1] - exact(10.0)) <= 1e-5
         steps[mode] = int(np.sum(r.t > 5.0))
     assert steps[True] < steps[False]
