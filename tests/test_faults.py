@@ -491,7 +491,22 @@ def test_back_pressure_below_the_fluid_range_is_located(tmp_path):
     assert_located(res, "boundary 'turbine'", "0.001 bar", "outside the range of Water (IF97)")
 
 
-def test_steady_start_without_a_steady_state_names_the_cause():
+def _attemperator_pi_file(tmp_dir) -> Path:
+    """plants/attemperator.toml with the seed's PIController (eqs. 10.13) in place of
+    its PIDController: the same gains, KI = Kp/T_i."""
+    text = (PLANTS / "attemperator.toml").read_text()
+    for old, new in (
+        ('type = "PIDController"', 'type = "PIController"'),
+        ('T_i = "33.3 s"', 'KI = "6e-4 1/(K.s)"'),
+    ):
+        assert old in text, old
+        text = text.replace(old, new)
+    path = Path(tmp_dir) / "attemperator_pi.toml"
+    path.write_text(text)
+    return path
+
+
+def test_steady_start_without_a_steady_state_names_the_cause(tmp_path):
     # 0.01 bar is inside IF97's range, but the turbine valve (m = C z sqrt(dp), no
     # choking) then passes 2.6 times its nominal flow, and the spray controller would
     # need an opening above 1 to hold its set point: no steady state exists
@@ -499,7 +514,7 @@ def test_steady_start_without_a_steady_state_names_the_cause():
     from dnasim.errors import PlantError
     from dnasim.start import initial_values
 
-    spec = dnasim.load_plant(PLANTS / "attemperator.toml")
+    spec = dnasim.load_plant(_attemperator_pi_file(tmp_path))
     spec.components["turbine"].params["p"] = 1000.0  # [Pa] = 0.01 bar
     system = dnasim.compile(spec)
     with pytest.raises(PlantError) as info:
@@ -588,13 +603,14 @@ def test_sigterm_at_any_early_time_gives_one_line_and_no_stale_files(tmp_path, d
 # --------------------------------------------------------------------------- 3. gains from Python
 
 
-def _attemperator_with_pi(**params):
-    """The attemperator plant built from Python, its controller given ``params``."""
+def _attemperator_with_pi(tmp_dir, **params):
+    """The attemperator plant built from Python, its controller a PIController given
+    ``params``; and the reference read from the plant file with a PIController."""
     import dnasim
     from dnasim.components.controller import PIController
     from dnasim.plant import Plant
 
-    ref = dnasim.load_plant(PLANTS / "attemperator.toml")
+    ref = dnasim.load_plant(_attemperator_pi_file(tmp_dir))
     plant = Plant("att", medium="Water")
     for c in ref.components.values():
         plant.add(PIController("pi", **params) if c.name == "pi" else c)
@@ -605,11 +621,11 @@ def _attemperator_with_pi(**params):
     return ref, plant
 
 
-def test_controller_units_from_python_are_read_as_from_a_plant_file():
+def test_controller_units_from_python_are_read_as_from_a_plant_file(tmp_path):
     import dnasim
 
     ref, plant = _attemperator_with_pi(
-        Kp="0.02 1/K", KI="6e-4 1/(K.s)", setpoint="450 degC", measured_nominal="700 K"
+        tmp_path, Kp="0.02 1/K", KI="6e-4 1/(K.s)", setpoint="450 degC", measured_nominal="700 K"
     )
     pi = dnasim.compile(plant).components["pi"]
     for k in ("Kp", "KI", "measured_nominal"):  # the file gives the same in these units
@@ -625,10 +641,10 @@ def test_controller_units_from_python_are_read_as_from_a_plant_file():
         ("2 %/bar", "1/temperature is expected"),
     ],
 )
-def test_controller_gain_from_python_refuses_what_a_plant_file_refuses(value, words):
+def test_controller_gain_from_python_refuses_what_a_plant_file_refuses(value, words, tmp_path):
     import dnasim
 
-    _, plant = _attemperator_with_pi(Kp=value, setpoint=723.15)
+    _, plant = _attemperator_with_pi(tmp_path, Kp=value, setpoint=723.15)
     with pytest.raises(dnasim.PlantError, match="component 'pi'") as info:
         dnasim.compile(plant)
     assert "'Kp'" in str(info.value) and words in str(info.value)
