@@ -18,6 +18,7 @@ kept them blocked (and so pending before Python started) is delivered here.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
@@ -78,6 +79,21 @@ def release() -> None:
     pending, _state["pending"] = _state["pending"], None
     if pending is not None:
         _raise(pending)
+
+
+@contextlib.contextmanager
+def held():
+    """Hold SIGTERM/SIGINT for the duration (code that must not be interrupted by an
+    exception, e.g. numba's compiler callbacks); a signal that arrived meanwhile is
+    raised at the end. Does nothing when the handlers are not ours or already hold."""
+    if not installed() or _state["holding"]:
+        yield
+        return
+    _state["holding"] = True
+    try:
+        yield
+    finally:
+        release()
 
 
 def _message(what: str) -> str:

@@ -63,6 +63,8 @@ class IF97Water(Medium):
         if kernel not in ("numba", "numpy"):
             raise ValueError(f"kernel must be 'numba' or 'numpy', not {kernel!r}")
         self.kernel = kernel
+        if kernel == "numba":
+            _load_compiled_kernels()
 
     # ------------------------------------------------------------- state
     def _compute_state(self, p: float, h: float) -> FluidState:
@@ -141,3 +143,24 @@ class IF97Water(Medium):
                 "p outside the IF97 saturation range [611.213 Pa, p_c = 22.064 MPa)",
             )
         return float(self.h_px(p, x))
+
+
+def _load_compiled_kernels() -> None:
+    """Compile (first use on a machine, ~10 s) or load from numba's cache the four
+    entry points, with SIGTERM/SIGINT held meanwhile (``dnasim.entry.held``): a signal
+    raised inside numba's compiler callbacks would be swallowed there (ctypes ignores
+    exceptions in callbacks) and the run would go on."""
+    if _load_compiled_kernels.done:
+        return
+    from dnasim.entry import held
+
+    with held():
+        p, h = np.array([1e6]), np.array([1e6])
+        NB.ph_scalar(1e6, 1e6)
+        NB.ph_arrays(p, h)
+        NB.h_pT_scalar(1e6, 400.0)
+        NB.saturation_arrays(p)
+    _load_compiled_kernels.done = True
+
+
+_load_compiled_kernels.done = False
