@@ -68,6 +68,7 @@ __all__ = [
     "REGISTRY",
     "Param",
     "FluidPort",
+    "flow_through_ports",
     "SignalPort",
     "Variable",
     "Equation",
@@ -210,6 +211,23 @@ class FluidPort:
     h_source: bool = True
     pressure_param: str | None = None
     m_eps: float = 1e-6
+
+
+def flow_through_ports(m_eps: float, outlet_h: str = "inlet.h") -> list[FluidPort]:
+    """The inlet and outlet of a component without storage whose one mass flow
+    variable ``m`` [kg/s] passes both ports (valves, pumps, turbines). Fluid leaving
+    through the inlet (reverse flow) carries the outlet node's h; fluid leaving
+    through the outlet carries ``outlet_h``: the inlet node's h for a throttle
+    (isenthalpic), the component's own outlet enthalpy (e.g. "h_2") for a machine.
+    ``m_eps`` [kg/s]: the flow scale of the upwind weight at both ports."""
+    return [
+        FluidPort(
+            "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=m_eps
+        ),
+        FluidPort(
+            "outlet", "outlet", "m", "resistance", h_out=outlet_h, h_source=False, m_eps=m_eps
+        ),
+    ]
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from dnasim.components.base import (
     Param,
     SignalPort,
     Variable,
+    flow_through_ports,
 )
 from dnasim.components.physics import softplus, upwind_mean, valve_flow
 from dnasim.errors import PlantError
@@ -197,15 +198,7 @@ class ControlValve(Component):
         self._K = None
 
     def fluid_ports(self):
-        eps = self.m_eps
-        return [
-            FluidPort(
-                "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=eps
-            ),
-            FluidPort(
-                "outlet", "outlet", "m", "resistance", h_out="inlet.h", h_source=False, m_eps=eps
-            ),
-        ]
+        return flow_through_ports(self.m_eps, "inlet.h")
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.opening_from_signal else []

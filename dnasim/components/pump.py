@@ -13,6 +13,7 @@ from dnasim.components.base import (
     Param,
     SignalPort,
     Variable,
+    flow_through_ports,
 )
 from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean, upwind_weight
 from dnasim.errors import PlantError
@@ -202,15 +203,7 @@ class Pump(Component):
         return f, float(q[-1]), float(h[-1]), float(d(0.0)), float(d(q[-1]))
 
     def fluid_ports(self):
-        eps = self.m_eps
-        return [
-            FluidPort(
-                "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=eps
-            ),
-            FluidPort(
-                "outlet", "outlet", "m", "resistance", h_out="h_2", h_source=False, m_eps=eps
-            ),
-        ]
+        return flow_through_ports(self.m_eps, "h_2")
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.speed_from_signal else []

@@ -4,7 +4,15 @@ from __future__ import annotations
 
 import math
 
-from dnasim.components.base import Component, Equation, FluidPort, Param, SignalPort, Variable
+from dnasim.components.base import (
+    Component,
+    Equation,
+    FluidPort,
+    Param,
+    SignalPort,
+    Variable,
+    flow_through_ports,
+)
 from dnasim.components.physics import upwind_mean, upwind_weight
 from dnasim.errors import PlantError
 from dnasim.media.isentropic import h_isentropic
@@ -112,15 +120,7 @@ class SteamTurbine(Component):
         return self._K_t
 
     def fluid_ports(self):
-        eps = self.m_eps
-        return [
-            FluidPort(
-                "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=eps
-            ),
-            FluidPort(
-                "outlet", "outlet", "m", "resistance", h_out="h_2", h_source=False, m_eps=eps
-            ),
-        ]
+        return flow_through_ports(self.m_eps, "h_2")
 
     def variables(self):
         mn = self.params["m_nominal"]

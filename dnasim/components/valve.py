@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-from dnasim.components.base import Component, Equation, FluidPort, Param, SignalPort, Variable
+from dnasim.components.base import (
+    Component,
+    Equation,
+    FluidPort,
+    Param,
+    SignalPort,
+    Variable,
+    flow_through_ports,
+)
 from dnasim.components.physics import valve_flow
 
 
@@ -67,15 +75,7 @@ class Valve(Component):
         self.opening_from_signal = self.params["opening"] is None
 
     def fluid_ports(self):
-        eps = self.m_eps
-        return [
-            FluidPort(
-                "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=eps
-            ),
-            FluidPort(
-                "outlet", "outlet", "m", "resistance", h_out="inlet.h", h_source=False, m_eps=eps
-            ),
-        ]
+        return flow_through_ports(self.m_eps, "inlet.h")
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.opening_from_signal else []
