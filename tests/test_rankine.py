@@ -1,7 +1,7 @@
-"""plants/rankine.toml: a closed Rankine cycle (feed pump, drum heated by the furnace,
-flue-gas superheater, steam turbine, condenser). Its steady-state cycle efficiency
-against a hand calculation with IF97 (CoolProp), its balances, its response to a
-flue-gas step; and the node guesses that let the closed loop start.
+"""plants/rankine.toml: a closed Rankine cycle (feed pump, flue-gas economiser, drum
+heated by the furnace, flue-gas superheater, steam turbine, condenser). Its
+steady-state cycle efficiency against a hand calculation with IF97 (CoolProp), its
+balances, its response to a flue-gas step; and the node guesses that let the closed loop start.
 
 Hand calculation (the same component parameters: pump efficiency eta_p, turbine
 isentropic efficiency eta_t; the cycle's pressures and the live-steam temperature
@@ -13,8 +13,8 @@ from the run's steady state; every enthalpy from CoolProp's IF97):
     4 exhaust        h4 = h3 - eta_t (h3 - h(p4, s3))
     eta = ((h3 - h4) - (h2 - h1)) / (h3 - h2)                                    [-]
 
-The simulated efficiency is (P_turbine - P_pump) / (Q_drum + Q_superheater), the
-heat inputs on the furnace / flue-gas side.
+The simulated efficiency is (P_turbine - P_pump) / (Q_drum + Q_economiser +
+Q_superheater), the heat inputs on the furnace / flue-gas side.
 """
 
 from pathlib import Path
@@ -58,7 +58,7 @@ def efficiencies(plant, r, t):
     s3 = PropsSI("S", "P", p3, "H", h3, WATER)
     h4 = h3 - eta_t * (h3 - PropsSI("H", "P", p4, "S", s3, WATER))
     eta_hand = ((h3 - h4) - (h2 - h1)) / (h3 - h2)
-    Q_in = _at(r, "drum.Q_in", t) + _at(r, "superheater.Q_total", t)
+    Q_in = sum(_at(r, k, t) for k in ("drum.Q_in", "economiser.Q_total", "superheater.Q_total"))
     eta_sim = (_at(r, "turbine.P", t) - _at(r, "pump.P", t)) / Q_in
     return eta_sim, eta_hand
 
@@ -80,20 +80,24 @@ def test_rankine_cycle_efficiency_matches_the_hand_calculation(rankine):
     # 0.1 % (the issue's): the run has settled (test above), so the heat taken from
     # the furnace and the flue gas is the water's enthalpy rise h3 - h2
     assert eta_sim == pytest.approx(eta_hand, rel=1e-3), (eta_sim, eta_hand)
-    assert 0.30 < eta_sim < 0.40  # a Rankine cycle at 100 bar / 530 degC / 0.086 bar
+    assert 0.30 < eta_sim < 0.40  # a Rankine cycle at 95 bar / 530 degC / 0.086 bar
 
 
-def test_rankine_flue_gas_step_heats_the_live_steam(rankine):
-    # +10 % flue gas at 1500 s: more superheater duty, hotter live steam, more power
+def test_rankine_flue_gas_step_and_physical_states(rankine):
+    # +10 % flue gas at 1500 s: the gas/water exchangers take more heat at once (the
+    # gas side settles in < 1 s; 20 s later the walls have moved little): > 2 %
     _, r = rankine
-    before = {k: _at(r, k, T_STEP - 1.0) for k in ("superheater.Q_total", "n_live.T")}
-    after = {k: r[k][-1] for k in before}
-    assert after["superheater.Q_total"] > before["superheater.Q_total"] * 1.005
-    assert after["n_live.T"] > before["n_live.T"] + 0.5  # K
+    gas_heat = ("economiser.Q_total", "superheater.Q_total")
+    before = sum(_at(r, k, T_STEP - 1.0) for k in gas_heat)
+    after = sum(_at(r, k, T_STEP + 20.0) for k in gas_heat)
+    assert after > 1.02 * before, (before, after)
     # the drum level is back at its set point (PI with integral action), to 1 cm
     assert abs(r["drum.level"][-1] - 2.0) < 0.01
-    # no value crosses to an unphysical state on the way
-    assert np.all(r["n_live.T"] > r["drum.T"])  # the live steam is superheated
+    # the economiser never steams: its outlet stays below the drum's saturation
+    # temperature (the economiser's own pressure is higher still)
+    assert np.all(r["n_eco.T"] < r["drum.T"])
+    # the live steam is superheated, flows stay forward
+    assert np.all(r["n_live.T"] > r["drum.T"])
     assert np.all(r["pump.m"] > 0) and np.all(r["turbine.m"] > 0)
 
 
@@ -108,7 +112,7 @@ def test_node_guesses_stay_within_each_stream():
     def p(node):
         return y[system.node_index[node]]
 
-    assert p("g_sh") == pytest.approx(1e5, rel=0.2)  # the stack's 1 bar, not 0.08 bar
+    assert p("g_eco") == pytest.approx(1e5, rel=0.2)  # the stack's 1 bar, not 0.08 bar
     pump = loaded.plant.components["pump"]
     # the discharge guess is 1 bar + rho g H(m_nominal) with 1000 kg/m3
     assert p("n_pump") > p("n_feed")  # above the drum: the feed valve starts forward
