@@ -3,7 +3,8 @@
 1. Node guesses: each component may guess (p, h) at its ports
    (``Component.guess_nodes``). A fixed-pressure port wins for p, a port that
    supplies its own enthalpy (``FluidPort.h_source``) wins for h.
-2. Missing node guesses are propagated along components, inlet to outlet and
+2. Missing node guesses are propagated along components (within each stream of
+   a two-stream component, ``medium_groups``), inlet to outlet and
    back (enthalpy along the design direction), then default to p = 1e5 Pa and
    h = h(1e5 Pa, 293.15 K) of the node's fluid.
 3. Components fill their own variables (``Component.initial_guess``) in flow
@@ -52,6 +53,15 @@ def flow_order(plant) -> list[str]:
     return fluid + signal
 
 
+def _streams(comp) -> list[list]:
+    """The component's fluid ports grouped by stream (``Component.medium_groups``;
+    ports in no group, e.g. probes, form one more group)."""
+    ports = {p.name: p for p in comp.fluid_ports()}
+    groups = [[ports[n] for n in g[2] if n in ports] for g in comp.medium_groups()]
+    rest = [p for n, p in ports.items() if not any(n in g[2] for g in comp.medium_groups())]
+    return [g for g in groups + [rest] if g]
+
+
 def initial_guess(system, t0: float) -> np.ndarray:
     y = np.zeros(system.n)
     p_guess, h_guess = {}, {}
@@ -67,27 +77,25 @@ def initial_guess(system, t0: float) -> np.ndarray:
                 p_guess[node], p_rank[node] = p, rp
             if h is not None and rh > h_rank.get(node, 0):
                 h_guess[node], h_rank[node] = h, rh
-    # propagate along components
+    # propagate along components, within each stream (``medium_groups``): a heat
+    # exchanger's gas side must not take the water side's pressure
     for _ in range(len(system.components) + 1):
         changed = False
         for name, comp in system.components.items():
-            nodes = [system.connections[(name, p.name)] for p in comp.fluid_ports()]
-            inlets = [
-                system.connections[(name, p.name)] for p in comp.fluid_ports() if p.role == "inlet"
-            ]
-            outlets = [
-                system.connections[(name, p.name)] for p in comp.fluid_ports() if p.role == "outlet"
-            ]
-            known_p = [p_guess[n] for n in nodes if n in p_guess]
-            for n in nodes:
-                if n not in p_guess and known_p:
-                    p_guess[n] = known_p[0]
-                    changed = True
-            known_h = [h_guess[n] for n in inlets if n in h_guess]
-            for n in outlets:
-                if n not in h_guess and known_h:
-                    h_guess[n] = known_h[0]
-                    changed = True
+            for ports in _streams(comp):
+                nodes = [system.connections[(name, p.name)] for p in ports]
+                inlets = [system.connections[(name, p.name)] for p in ports if p.role == "inlet"]
+                outlets = [system.connections[(name, p.name)] for p in ports if p.role == "outlet"]
+                known_p = [p_guess[n] for n in nodes if n in p_guess]
+                for n in nodes:
+                    if n not in p_guess and known_p:
+                        p_guess[n] = known_p[0]
+                        changed = True
+                known_h = [h_guess[n] for n in inlets if n in h_guess]
+                for n in outlets:
+                    if n not in h_guess and known_h:
+                        h_guess[n] = known_h[0]
+                        changed = True
         if not changed:
             break
     for node in system.node_names:

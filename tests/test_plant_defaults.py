@@ -284,6 +284,7 @@ def test_phase_switches_are_declared_per_volume_when_asked():
         "superheater_line.toml",
         "drum_boiler.toml",
         "feedwater_heater.toml",
+        "rankine.toml",
     ],
 )
 def test_shipped_plants_close_mass_and_energy(name):

@@ -316,6 +316,14 @@ class Pump(Component):
         dp = float(softplus(x["outlet.p"] - x["inlet.p"], self.params["dp_reg"]))
         return x["h_2"] - x["inlet.h"] - dp / (rho * eta)
 
+    def guess_nodes(self, t0):
+        """Discharge pressure guess [Pa]: 1 bar plus the head at m_nominal with cold water
+        (1000 kg/m3), so that the nodes downstream are not guessed at the suction
+        pressure (a feed line guessed at condenser pressure starts as steam)."""
+        rho = 1000.0
+        H = self.head(self.params["m_nominal"] / rho, 1.0, rho)
+        return {"outlet": (1e5 + rho * G * max(H, 0.0), None)}
+
     def initial_guess(self, t0, x):
         mn = self.params["m_nominal"]
         r = self.param_at("speed", t0) if not self.speed_from_signal else 1.0

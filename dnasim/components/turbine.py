@@ -194,9 +194,12 @@ class SteamTurbine(Component):
 
     def guess_nodes(self, t0):
         P = self.params
+        out = {}
+        if P["p_in_nominal"] is not None:
+            out["inlet"] = (P["p_in_nominal"], None)
         if self._K_t is None and P["p_out_nominal"] is not None:
-            return {"outlet": (P["p_out_nominal"], None)}
-        return {}
+            out["outlet"] = (P["p_out_nominal"], None)
+        return out
 
     def initial_guess(self, t0, x):
         x["m"] = self.flow(x, m=self.params["m_nominal"])
