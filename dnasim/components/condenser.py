@@ -216,34 +216,133 @@ class Condenser(Component):
         return out
 
     def equations(self):
+        P = self.params
         shell = ("p_v", "h_v")
         eqs = [
-            Equation("mass", y=("m_s", "m_c"), yp=("M",), unit="kg/s"),
+            Equation(
+                "mass",
+                y=("m_s", "m_c"),
+                yp=("M",),
+                unit="kg/s",
+                doc="dM/dt = m_s - m_c",
+                residual=lambda t, x, xp: xp["M"] - (x["m_s"] - x["m_c"]),
+            ),
             Equation(
                 "energy",
                 y=("m_s", "m_c", "steam_in.h", "h_v", "condensate_out.h", "h_c", "Q"),
                 yp=("U",),
                 unit="W",
+                doc="dU/dt = E_in(m_s) - E_out(m_c) - Q",
+                residual=lambda t, x, xp: xp["U"] - (x.work["E"] - x["Q"]),
             ),
-            Equation("density", y=("M",) + shell, unit="kg"),
-            Equation("internal_energy", y=("U", "M") + shell, unit="J"),
-            Equation("steam_pressure", y=("steam_in.p", "p_v"), unit="Pa"),
-            Equation("condensate", y=("h_c",) + shell, unit="J/kg"),
-            Equation("level", y=("level", "M") + shell, unit="m"),
-            Equation("hotwell_pressure", y=("condensate_out.p", "level") + shell, unit="Pa"),
-            Equation("saturation", y=("T_sat", "p_v"), unit="K"),
+            Equation(
+                "density",
+                y=("M",) + shell,
+                unit="kg",
+                doc="M = V rho(p_v, h_v)",
+                residual=lambda t, x, xp: x["M"] - P["V"] * x.work["state"].rho,
+            ),
+            Equation(
+                "internal_energy",
+                y=("U", "M") + shell,
+                unit="J",
+                doc="U = M u(p_v, h_v)",
+                residual=lambda t, x, xp: x["U"] - x["M"] * x.work["state"].u,
+            ),
+            Equation(
+                "steam_pressure",
+                y=("steam_in.p", "p_v"),
+                unit="Pa",
+                doc="p_steam_in = p_v",
+                residual=lambda t, x, xp: x["steam_in.p"] - x["p_v"],
+            ),
+            Equation(
+                "condensate",
+                y=("h_c",) + shell,
+                unit="J/kg",
+                doc="h_c = h' - softplus(h' - h_v)",
+                residual=lambda t, x, xp: (
+                    x["h_c"]
+                    - (x.work["hl"] - float(softplus(x.work["hl"] - x["h_v"], H_MIN_WIDTH)))
+                ),
+            ),
+            Equation(
+                "level",
+                y=("level", "M") + shell,
+                unit="m",
+                doc="level = V_l/A_hotwell, V_l = M (1 - x)/rho'",
+                residual=lambda t, x, xp: x["level"] - x.work["level"],
+            ),
+            Equation(
+                "hotwell_pressure",
+                y=("condensate_out.p", "level") + shell,
+                unit="Pa",
+                doc="p_condensate_out = p_v + rho' g level",
+                residual=lambda t, x, xp: (
+                    x["condensate_out.p"] - (x["p_v"] + x.work["rho_l"] * G * x["level"])
+                ),
+            ),
+            Equation(
+                "saturation",
+                y=("T_sat", "p_v"),
+                unit="K",
+                doc="T_sat = T_s(p_v)",
+                residual=lambda t, x, xp: x["T_sat"] - x.work["T_sat"],
+            ),
         ]
         if self.water:
             cw = ("m_w", "cw_in.p", "cw_in.h", "cw_out.p", "cw_out.h")
             eqs += [
-                Equation("cw_friction", y=cw, unit="Pa"),
-                Equation("cw_outlet", y=("h_w2", "T_sat") + cw, unit="J/kg"),
-                Equation("heat", y=("Q", "m_w", "h_w2", "cw_in.h"), unit="W"),
+                Equation(
+                    "cw_friction",
+                    y=cw,
+                    unit="Pa",
+                    doc="p_cw_in - p_cw_out = cw_k m_w sqrt(m_w^2 + m_reg^2)/rho_w",
+                    residual=lambda t, x, xp: (
+                        x["cw_in.p"]
+                        - x["cw_out.p"]
+                        - friction_dp(x.work["cw_k"], x["m_w"], x.work["rho_w"], self.m_reg_w)
+                    ),
+                ),
+                Equation(
+                    "cw_outlet",
+                    y=("h_w2", "T_sat") + cw,
+                    unit="J/kg",
+                    doc="h_w2 = h_w1 + eps cp_w (T_sat - T_w1)",
+                    residual=lambda t, x, xp: (
+                        x["h_w2"]
+                        - (x["cw_in.h"] + self.water_heating(x["m_w"], x.work["s1"], x["T_sat"]))
+                    ),
+                ),
+                Equation(
+                    "heat",
+                    y=("Q", "m_w", "h_w2", "cw_in.h"),
+                    unit="W",
+                    doc="Q = w(m_w) (h_w2 - h_w1)",
+                    residual=lambda t, x, xp: (
+                        x["Q"]
+                        - float(upwind_weight(x["m_w"], M_EPS_W * P["cw_m_nominal"]))
+                        * (x["h_w2"] - x["cw_in.h"])
+                    ),
+                ),
             ]
         else:
             eqs += [
-                Equation("heat", y=("Q",), unit="W"),
-                Equation("heat_passed", y=("Q",), yp=("Q_passed",), unit="W"),
+                Equation(
+                    "heat",
+                    y=("Q",),
+                    unit="W",
+                    doc="Q = Q(t)",
+                    residual=lambda t, x, xp: x["Q"] - self.param_at("Q", t),
+                ),
+                Equation(
+                    "heat_passed",
+                    y=("Q",),
+                    yp=("Q_passed",),
+                    unit="W",
+                    doc="dQ_passed/dt = Q",
+                    residual=lambda t, x, xp: xp["Q_passed"] - x["Q"],
+                ),
             ]
         return eqs
 
@@ -268,7 +367,10 @@ class Condenser(Component):
         V_l = M * (1.0 - x) / rho_l
         return min(max(V_l, 0.0), self.params["V"])
 
-    def residual(self, t, x, xp):
+    def prepare(self, t, x, xp):
+        """Shared per evaluation: the shell state, the saturation properties at p_v (one
+        property call each), the port energy flows, the level; the cooling water's
+        inlet and outlet states, its density upwind and cw_k."""
         P = self.params
         p, h = x["p_v"], x["h_v"]
         st = self.shell_medium.state(p, h)
@@ -277,42 +379,23 @@ class Condenser(Component):
         E = energy_in(x["m_s"], x["steam_in.h"], h, eps) + energy_in(
             -x["m_c"], x["condensate_out.h"], x["h_c"], eps
         )
-        level = self.liquid_volume(x["M"], h, hl, hv, rho_l) / P["A_hotwell"]
-        r = [
-            xp["M"] - (x["m_s"] - x["m_c"]),
-            xp["U"] - (float(E) - x["Q"]),
-            x["M"] - P["V"] * st.rho,
-            x["U"] - x["M"] * st.u,
-            x["steam_in.p"] - p,
-            x["h_c"] - (hl - float(softplus(hl - h, H_MIN_WIDTH))),
-            x["level"] - level,
-            x["condensate_out.p"] - (p + rho_l * G * x["level"]),
-            x["T_sat"] - T_sat,
-        ]
+        work = {
+            "state": st,
+            "hl": hl,
+            "rho_l": rho_l,
+            "T_sat": T_sat,
+            "E": float(E),
+            "level": self.liquid_volume(x["M"], h, hl, hv, rho_l) / P["A_hotwell"],
+        }
         if self.water:
-            r += self.water_residuals(x)
-        else:
-            r += [x["Q"] - self.param_at("Q", t), xp["Q_passed"] - x["Q"]]
-        return np.array(r)
-
-    def water_residuals(self, x):
-        mw = x["m_w"]
-        medium = self.water_medium
-        s1 = medium.state(x["cw_in.p"], x["cw_in.h"])
-        s2 = medium.state(x["cw_out.p"], x["cw_out.h"])
-        rho = s1.rho if mw >= 0 else s2.rho
-        k = self.cw_k
-        if k is None:
-            P = self.params
-            k = P["cw_dp_nominal"] * s1.rho / P["cw_m_nominal"] ** 2
-        dh = self.water_heating(mw, s1, x["T_sat"])
-        return [
-            x["cw_in.p"] - x["cw_out.p"] - friction_dp(k, mw, rho, self.m_reg_w),
-            x["h_w2"] - (x["cw_in.h"] + dh),
-            x["Q"]
-            - float(upwind_weight(mw, M_EPS_W * self.params["cw_m_nominal"]))
-            * (x["h_w2"] - x["cw_in.h"]),
-        ]
+            medium = self.water_medium
+            s1 = medium.state(x["cw_in.p"], x["cw_in.h"])
+            s2 = medium.state(x["cw_out.p"], x["cw_out.h"])
+            k = self.cw_k
+            if k is None:
+                k = P["cw_dp_nominal"] * s1.rho / P["cw_m_nominal"] ** 2
+            work.update(s1=s1, rho_w=s1.rho if x["m_w"] >= 0 else s2.rho, cw_k=k)
+        return work
 
     def water_heating(self, mw, s1, T_sat):
         """eps cp_w (T_sat - T_w1) [J/kg], the epsilon-NTU rise of the water's enthalpy."""

@@ -177,31 +177,63 @@ class _SaturatedVessel(Component):
         return tuple(dep)
 
     def equations(self):
+        P = self.params
         flows = tuple(f"m_{n}" for n, _, _, _ in self.PORTS)
         heat = ("Q",) if self.heat_from_signal else ()
         eqs = [
-            Equation("mass", y=flows, yp=("M",), unit="kg/s", doc="dM/dt = sum m_in - sum m_out"),
+            Equation(
+                "mass",
+                y=flows,
+                yp=("M",),
+                unit="kg/s",
+                doc="dM/dt = sum m_in - sum m_out",
+                residual=lambda t, x, xp: xp["M"] - self.net_inflow(x),
+            ),
             Equation(
                 "energy",
                 y=self._port_terms() + ("h_l", "h_v") + heat,
                 yp=("U",),
                 unit="W",
                 doc="dU/dt = sum E_in - sum E_out + Q",
+                residual=lambda t, x, xp: xp["U"] - (sum(self.port_energy(x)) + self.heat(t, x)),
             ),
             Equation(
                 "mass_def",
                 y=("M", "p", "V_l"),
                 unit="kg",
                 doc="M = rho_l V_l + rho_v (V_t - V_l)",
+                residual=lambda t, x, xp: (
+                    x["M"] - (x.work["rho_l"] * x["V_l"] + x.work["rho_v"] * x.work["V_v"])
+                ),
             ),
             Equation(
                 "energy_def",
                 y=("U", "p", "V_l"),
                 unit="J",
                 doc="U = rho_l V_l u_l + rho_v V_v u_v + m_D cp_D T_s(p)",
+                residual=lambda t, x, xp: (
+                    x["U"]
+                    - (
+                        x.work["rho_l"] * x["V_l"] * x.work["u_l"]
+                        + x.work["rho_v"] * x.work["V_v"] * x.work["u_v"]
+                        + P["m_D"] * P["cp_D"] * x.work["T_s"]
+                    )
+                ),
             ),
-            Equation("liquid_enthalpy", y=("h_l", "p"), unit="J/kg", doc="h_l = h'(p)"),
-            Equation("vapour_enthalpy", y=("h_v", "p"), unit="J/kg", doc="h_v = h''(p)"),
+            Equation(
+                "liquid_enthalpy",
+                y=("h_l", "p"),
+                unit="J/kg",
+                doc="h_l = h'(p)",
+                residual=lambda t, x, xp: x["h_l"] - x.work["h_l"],
+            ),
+            Equation(
+                "vapour_enthalpy",
+                y=("h_v", "p"),
+                unit="J/kg",
+                doc="h_v = h''(p)",
+                residual=lambda t, x, xp: x["h_v"] - x.work["h_v"],
+            ),
         ]
         liquid_in = tuple(
             f"m_{n}" for n, role, ph, _ in self.PORTS if role == "inlet" and ph == "liquid"
@@ -214,6 +246,9 @@ class _SaturatedVessel(Component):
                     yp=("z",),
                     unit="kg/s",
                     doc="tau_b dz/dt = M_l - z",
+                    residual=lambda t, x, xp: (
+                        self.tau_b * xp["z"] - (x.work["rho_l"] * x["V_l"] - x["z"])
+                    ),
                 )
             )
             eqs.append(
@@ -222,21 +257,70 @@ class _SaturatedVessel(Component):
                     y=("level", "V_l", "p", "z") + liquid_in,
                     unit="m",
                     doc="level = (V_l + V_b)/A, V_b = tau_b q_e/rho_v",
+                    residual=lambda t, x, xp: (
+                        x["level"]
+                        - (x["V_l"] + self._bubble_volume(x, x.work["rho_l"], x.work["rho_v"]))
+                        / P["A"]
+                    ),
                 )
             )
         else:
-            eqs.append(Equation("level", y=("level", "V_l"), unit="m", doc="level = V_l/A"))
+            eqs.append(
+                Equation(
+                    "level",
+                    y=("level", "V_l"),
+                    unit="m",
+                    doc="level = V_l/A",
+                    residual=lambda t, x, xp: x["level"] - x["V_l"] / P["A"],
+                )
+            )
         for n, _, _, _ in self.PORTS:
-            eqs.append(Equation(f"pressure_{n}", y=(f"{n}.p", "p"), unit="Pa", doc="p_port = p"))
+            eqs.append(
+                Equation(
+                    f"pressure_{n}",
+                    y=(f"{n}.p", "p"),
+                    unit="Pa",
+                    doc="p_port = p",
+                    residual=lambda t, x, xp, n=n: x[f"{n}.p"] - x["p"],
+                )
+            )
         eqs.append(
-            Equation("heat_passed", y=heat, yp=("Q_passed",), unit="W", doc="dQ_passed/dt = -Q")
+            Equation(
+                "heat_passed",
+                y=heat,
+                yp=("Q_passed",),
+                unit="W",
+                doc="dQ_passed/dt = -Q",
+                residual=lambda t, x, xp: xp["Q_passed"] + self.heat(t, x),
+            )
         )
         return eqs
 
     # ---------------------------------------------------------------- residual
+    def prepare(self, t, x, xp):
+        """The saturation properties at p (one property call per evaluation) and V_v."""
+        T_s, rho_l, rho_v, u_l, u_v, h_l, h_v = saturation_properties(self.medium, x["p"])
+        return {
+            "T_s": T_s,
+            "rho_l": rho_l,
+            "rho_v": rho_v,
+            "u_l": u_l,
+            "u_v": u_v,
+            "h_l": h_l,
+            "h_v": h_v,
+            "V_v": self.params["V_t"] - x["V_l"],
+        }
+
     def heat(self, t, x):
         """Heat input Q [W]."""
         return x["Q"] if self.heat_from_signal else self.param_at("Q", t)
+
+    def net_inflow(self, x):
+        """sum m_in - sum m_out [kg/s]."""
+        m_net = 0.0
+        for n, role, _, _ in self.PORTS:
+            m_net += x[f"m_{n}"] if role == "inlet" else -x[f"m_{n}"]
+        return m_net
 
     def port_energy(self, x):
         """Energy flows INTO the vessel at each port [W], in PORTS order."""
@@ -256,33 +340,6 @@ class _SaturatedVessel(Component):
     def _bubble_volume(self, x, rho_l, rho_v):
         q_e = self.liquid_inflow(x) - (rho_l * x["V_l"] - x["z"]) / self.tau_b
         return self.tau_b * q_e / rho_v
-
-    def residual(self, t, x, xp):
-        P = self.params
-        p, V_l = x["p"], x["V_l"]
-        T_s, rho_l, rho_v, u_l, u_v, h_l, h_v = saturation_properties(self.medium, p)
-        V_v = P["V_t"] - V_l
-        m_net = 0.0
-        for n, role, _, _ in self.PORTS:
-            m_net += x[f"m_{n}"] if role == "inlet" else -x[f"m_{n}"]
-        r = [
-            xp["M"] - m_net,
-            xp["U"] - (sum(self.port_energy(x)) + self.heat(t, x)),
-            x["M"] - (rho_l * V_l + rho_v * V_v),
-            x["U"] - (rho_l * V_l * u_l + rho_v * V_v * u_v + P["m_D"] * P["cp_D"] * T_s),
-            x["h_l"] - h_l,
-            x["h_v"] - h_v,
-        ]
-        if self.tau_b > 0:
-            r.append(self.tau_b * xp["z"] - (rho_l * V_l - x["z"]))
-            V_b = self._bubble_volume(x, rho_l, rho_v)
-            r.append(x["level"] - (V_l + V_b) / P["A"])
-        else:
-            r.append(x["level"] - V_l / P["A"])
-        for n, _, _, _ in self.PORTS:
-            r.append(x[f"{n}.p"] - p)
-        r.append(xp["Q_passed"] + self.heat(t, x))
-        return np.array(r)
 
     # ----------------------------------------------------------------- outputs
     def outputs(self):

@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
@@ -283,11 +281,8 @@ class Pipe(Component):
     def equations(self):
         n, C_i = self.n, self.params["C_wall"] / self.n
         eqs = self.channel.equations()
-        if self.wall_model is not None:  # walls.py: residuals computed in prepare
-            return eqs + [
-                dataclasses.replace(e, residual=lambda t, x, xp, k=k: x.work["wall_model"][k])
-                for k, e in enumerate(self.wall_model.equations())
-            ]
+        if self.wall_model is not None:  # walls.py
+            return eqs + self.wall_model.equations()
         if self.fixed_wall:
             eqs.append(
                 Equation(
@@ -339,8 +334,6 @@ class Pipe(Component):
         props = self.channel.evaluate(self.medium, x)
         work = self.channel.blocks(x, xp, props, x["T_w"])
         work["T"] = props[2]
-        if self.wall_model is not None:
-            work["wall_model"] = self.wall_model.residual(t, x, xp)
         return work
 
     def outputs(self):

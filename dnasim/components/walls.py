@@ -174,29 +174,62 @@ class WallModel:
         return out
 
     def equations(self):
-        eqs = []
+        """The node balances, then "heat_passed". A lumped wall (N = 1) is one vector
+        equation "wall" over the n volumes. A layered wall is N scalar equations
+        per volume, "wall[i]" (inner node) and "wall[i,k]", volume by volume, so
+        that one volume's nodes are adjacent rows (the row order the solver's
+        matching and band ordering start from; a node-by-node order of vector
+        equations would change the pivot order and so the run's rounding)."""
         N = self.N
-        for i in range(self.n):
+        eqs = []
+        node_doc = "C_k dT_k/dt = conduction in - out (+ Q fluid, + outer)"
+        if N == 1:
+            if self.fixed_outer:
+                eqs.append(
+                    Equation(
+                        "wall",
+                        size=self.n,
+                        y=lambda i: (self.node(i, 0),),
+                        unit="K",
+                        doc="T = T_outer(t)",
+                        residual=lambda t, x, xp: self._fixed_residual(t, x, 0, slice(None)),
+                    )
+                )
+            else:
+                eqs.append(
+                    Equation(
+                        "wall",
+                        size=self.n,
+                        y=lambda i: self._node_dependencies(i, 0),
+                        yp=lambda i: (self.node(i, 0),),
+                        unit="W",
+                        doc=node_doc,
+                        residual=lambda t, x, xp: self._node_residual(t, x, xp, 0, slice(None)),
+                    )
+                )
+        for i in range(self.n if N > 1 else 0):
             for k in range(N):
                 name = f"wall[{i}]" if k == 0 else f"wall[{i},{k}]"
                 me = self.node(i, k)
                 if self.fixed_outer and k == N - 1:
-                    eqs.append(Equation(name, y=(me,), unit="K", doc="T = T_outer(t)"))
+                    eqs.append(
+                        Equation(
+                            name,
+                            y=(me,),
+                            unit="K",
+                            doc="T = T_outer(t)",
+                            residual=lambda t, x, xp, i=i, k=k: self._fixed_residual(t, x, k, i),
+                        )
+                    )
                     continue
-                y = [me]
-                if k > 0:
-                    y.append(self.node(i, k - 1))
-                if k < N - 1:
-                    y.append(self.node(i, k + 1))
-                if k == 0:
-                    y.append(f"Q[{i}]")
                 eqs.append(
                     Equation(
                         name,
-                        y=tuple(y),
+                        y=self._node_dependencies(i, k),
                         yp=(me,),
                         unit="W",
-                        doc="C_k dT_k/dt = conduction in - out (+ Q fluid, + outer)",
+                        doc=node_doc,
+                        residual=lambda t, x, xp, i=i, k=k: self._node_residual(t, x, xp, k, i),
                     )
                 )
         dep = [self.node(i, N - 1) for i in range(self.n)]
@@ -210,11 +243,60 @@ class WallModel:
                 yp=("Q_passed",),
                 unit="W",
                 doc="dQ_passed/dt = heat out through the outer surface",
+                residual=lambda t, x, xp: xp["Q_passed"] - self._heat_out(t, x),
             )
         )
         return eqs
 
+    def _node_dependencies(self, i, k):
+        y = [self.node(i, k)]
+        if k > 0:
+            y.append(self.node(i, k - 1))
+        if k < self.N - 1:
+            y.append(self.node(i, k + 1))
+        if k == 0:
+            y.append(f"Q[{i}]")
+        return tuple(y)
+
     # ---------------------------------------------------------- residual
+    def node_temperature(self, v, k: int, i=slice(None)):
+        """T_k (or dT_k/dt from xp) [K] of volume i (an int) or of all n (a slice)."""
+        if k == 0:
+            return np.asarray(v["T_w"], dtype=float)[i]
+        return np.asarray(v["T_wl"], dtype=float).reshape(self.n, self.N - 1)[i, k - 1]
+
+    def node_flow(self, x, k: int, i=slice(None)):
+        """Net heat into node k [W] by conduction (and Q[i] at k = 0), of volume i (an
+        int) or of all n (a slice)."""
+        flow = np.zeros(self.n)[i]
+        if k < self.N - 1:  # to node k+1
+            flow -= self.G[k] * (
+                self.node_temperature(x, k, i) - self.node_temperature(x, k + 1, i)
+            )
+        if k > 0:  # from node k-1
+            flow += self.G[k - 1] * (
+                self.node_temperature(x, k - 1, i) - self.node_temperature(x, k, i)
+            )
+        if k == 0:
+            flow += np.asarray(x["Q"], dtype=float)[i]
+        return flow
+
+    def _node_residual(self, t, x, xp, k, i):
+        r = self.C[k] * self.node_temperature(xp, k, i) - self.node_flow(x, k, i)
+        if k == self.N - 1:
+            r -= self.outer_heat_in(t, self.node_temperature(x, k, i))
+        return r
+
+    def _fixed_residual(self, t, x, k, i):
+        return self.node_temperature(x, k, i) - self.param_at("T_outer", t)
+
+    def _heat_out(self, t, x) -> float:
+        """Heat leaving through the outer surface [W]: into the fixed outer nodes, or
+        minus the outer heat into the wall."""
+        if self.fixed_outer:
+            return float(np.sum(self.node_flow(x, self.N - 1)))
+        return -float(np.sum(self.outer_heat_in(t, self.node_temperature(x, self.N - 1))))
+
     def temperatures(self, x) -> np.ndarray:
         """Node temperatures, shape (n, N) [K]."""
         T = np.empty((self.n, self.N))
@@ -223,43 +305,15 @@ class WallModel:
             T[:, 1:] = np.asarray(x["T_wl"]).reshape(self.n, self.N - 1)
         return T
 
-    def derivatives(self, xp) -> np.ndarray:
-        dT = np.empty((self.n, self.N))
-        dT[:, 0] = xp["T_w"]
-        if self.N > 1:
-            dT[:, 1:] = np.asarray(xp["T_wl"]).reshape(self.n, self.N - 1)
-        return dT
-
     def outer_heat_in(self, t, T_outer_node):
-        """Q_o,i [W] into the outer nodes (convection and heat flux)."""
-        q = np.zeros(self.n)
+        """Q_o,i [W] into the outer nodes (convection and heat flux), at the outer
+        node temperatures T_outer_node [K] (one volume's or all n)."""
+        q = np.zeros(np.shape(T_outer_node))
         if self.convection:
             q += self.kA_outer / self.n * (self.param_at("T_outer", t) - T_outer_node)
         if self.Q_outer is not None:
             q += self.param_at("Q_outer", t) / self.n
         return q
-
-    def residual(self, t, x, xp):
-        """Residuals in the order of ``equations()``."""
-        T = self.temperatures(x)
-        dT = self.derivatives(xp)
-        N = self.N
-        flow = np.zeros((self.n, N))  # net heat into each node [W]
-        if N > 1:
-            cond = self.G[None, :] * (T[:, :-1] - T[:, 1:])  # from k to k+1
-            flow[:, :-1] -= cond
-            flow[:, 1:] += cond
-        flow[:, 0] += x["Q"]
-        r = self.C[None, :] * dT - flow
-        if self.fixed_outer:
-            r[:, -1] = T[:, -1] - self.param_at("T_outer", t)
-            out = flow[:, -1]  # all heat reaching the fixed node leaves
-            q_out = float(np.sum(out))
-        else:
-            q_in = self.outer_heat_in(t, T[:, -1])
-            r[:, -1] -= q_in
-            q_out = -float(np.sum(q_in))
-        return np.concatenate([r.reshape(-1), [xp["Q_passed"] - q_out]])
 
     def energy(self, x) -> float:
         """E_wall = sum C_k T_k [J] (nodes that store heat)."""
