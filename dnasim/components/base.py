@@ -69,6 +69,7 @@ __all__ = [
     "Param",
     "FluidPort",
     "flow_through_ports",
+    "shaft_work_equations",
     "SignalPort",
     "Variable",
     "Equation",
@@ -226,6 +227,37 @@ def flow_through_ports(m_eps: float, outlet_h: str = "inlet.h") -> list[FluidPor
         ),
         FluidPort(
             "outlet", "outlet", "m", "resistance", h_out=outlet_h, h_source=False, m_eps=m_eps
+        ),
+    ]
+
+
+def shaft_work_equations(comp, h_low: str, h_high: str) -> list[Equation]:
+    """The shaft power P [W] and its integral W [J] of a machine with one mass flow
+    ``m`` [kg/s] (pumps: work in, h_low = "inlet.h", h_high = "h_2"; turbines: work
+    out, h_low = "h_2", h_high = "inlet.h"):
+
+      power   P = w(m) (h_high - h_low)    w: smooth max(m, 0), physics.upwind_weight
+      work    dW/dt = P
+    """
+    from dnasim.components.physics import upwind_weight
+
+    return [
+        Equation(
+            "power",
+            y=("P", "m", h_high, h_low),
+            unit="W",
+            doc=f"P = w(m) ({h_high} - {h_low})",
+            residual=lambda t, x, xp: (
+                x["P"] - float(upwind_weight(x["m"], comp.m_eps)) * (x[h_high] - x[h_low])
+            ),
+        ),
+        Equation(
+            "work",
+            y=("P",),
+            yp=("W",),
+            unit="W",
+            doc="dW/dt = P",
+            residual=lambda t, x, xp: xp["W"] - x["P"],
         ),
     ]
 

@@ -14,8 +14,9 @@ from dnasim.components.base import (
     SignalPort,
     Variable,
     flow_through_ports,
+    shaft_work_equations,
 )
-from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean, upwind_weight
+from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean
 from dnasim.errors import PlantError
 
 
@@ -249,24 +250,7 @@ class Pump(Component):
                 doc="h_2 = h_in + softplus(p_out - p_in)/(rho eta)",
                 residual=self._enthalpy,
             ),
-            Equation(
-                "power",
-                y=("P", "m", "h_2", "inlet.h"),
-                unit="W",
-                doc="P = w(m) (h_2 - h_in)",
-                residual=lambda t, x, xp: (
-                    x["P"] - float(upwind_weight(x["m"], self.m_eps)) * (x["h_2"] - x["inlet.h"])
-                ),
-            ),
-            Equation(
-                "work",
-                y=("P",),
-                yp=("W",),
-                unit="W",
-                doc="dW/dt = P",
-                residual=lambda t, x, xp: xp["W"] - x["P"],
-            ),
-        ]
+        ] + shaft_work_equations(self, "inlet.h", "h_2")
 
     # --------------------------------------------------------------- physics
     def speed(self, t, x):

@@ -12,8 +12,9 @@ from dnasim.components.base import (
     SignalPort,
     Variable,
     flow_through_ports,
+    shaft_work_equations,
 )
-from dnasim.components.physics import upwind_mean, upwind_weight
+from dnasim.components.physics import upwind_mean
 from dnasim.errors import PlantError
 from dnasim.media.isentropic import h_isentropic
 
@@ -154,24 +155,7 @@ class SteamTurbine(Component):
                 doc="h_2 = h_in - eta (h_in - h(p_out, s_in))",
                 residual=lambda t, x, xp: x["h_2"] - self.outlet_enthalpy(x),
             ),
-            Equation(
-                "power",
-                y=("P", "m", "inlet.h", "h_2"),
-                unit="W",
-                doc="P = w(m) (h_in - h_2)",
-                residual=lambda t, x, xp: (
-                    x["P"] - float(upwind_weight(x["m"], self.m_eps)) * (x["inlet.h"] - x["h_2"])
-                ),
-            ),
-            Equation(
-                "work",
-                y=("P",),
-                yp=("W",),
-                unit="W",
-                doc="dW/dt = P",
-                residual=lambda t, x, xp: xp["W"] - x["P"],
-            ),
-        ]
+        ] + shaft_work_equations(self, "h_2", "inlet.h")
 
     # --------------------------------------------------------------- physics
     def flow(self, x, m=None):
