@@ -6,7 +6,7 @@ A case is a dict ``"COMPONENT.PARAMETER" -> value`` (``"valve.C" -> 0.01``,
 what a plant file accepts for that key: numbers in SI, strings with a unit, a
 time-function table, a string or a boolean. ``apply_case(spec, case)`` returns a
 copy of the spec with the values validated and converted to SI by the same rules
-as the plant files (``dnasim.plantfile._param_value``, ``_simulation``), so an
+as the plant files (``dnasim.values.param_value``, ``_simulation``), so an
 out-of-range value fails that case with the plant file's message.
 
 Sources of cases:
@@ -196,7 +196,8 @@ def _toml_cases(text: str, path: Path) -> list[dict[str, Any]]:
 
 def _parameter(spec, key: str):
     """(ComponentSpec, component class, Param) for "comp.param"; raises ``CaseError``."""
-    from dnasim.plantfile import _suggest, params_of
+    from dnasim.plantfile import params_of
+    from dnasim.values import suggest as _suggest
 
     cname, _, pname = key.partition(".")
     comps = {c.name: c for c in spec.components}
@@ -242,7 +243,8 @@ def _signal_units(spec, c) -> tuple:
 
 def case_units(spec, keys) -> dict[str, str]:
     """The SI unit of each case key ("steam.T" -> "K"); "" for strings and booleans."""
-    from dnasim.plantfile import _param_kind, param_unit_for
+    from dnasim.values import param_kind as _param_kind
+    from dnasim.values import param_unit_for
 
     units = {}
     for key in keys:
@@ -264,8 +266,9 @@ def check_cases(spec, cases) -> None:
     """Raise ``CaseError`` for an unknown component or parameter, or a value whose unit
     does not fit (the sweep's input, before anything runs). Values out of range are
     left to the case, which then fails with the plant file's message."""
-    from dnasim.plantfile import _param_kind, is_difference
     from dnasim.units import UnitError, convert_quantity
+    from dnasim.values import is_difference
+    from dnasim.values import param_kind as _param_kind
 
     seen = set()
     for case in cases:
@@ -306,8 +309,9 @@ def apply_case(spec, case: dict[str, Any]):
     """A copy of ``spec`` with the case's values (validated and converted to SI as in
     a plant file); raises ``PlantError`` naming the component and key, e.g.
     ``plant.toml, [components.valve], key 'C': -1 is out of the physical range``."""
-    from dnasim.plantfile import _param_value, _simulation
-    from dnasim.spec import Problems
+    from dnasim.errors import Problems
+    from dnasim.plantfile import _simulation
+    from dnasim.values import param_value as _param_value
 
     new = copy.deepcopy(spec)
     errors = Problems(f"{spec.path} (case {_case_text(case)})", None)

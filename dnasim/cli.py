@@ -369,7 +369,7 @@ def _run(
     if max_order is not None:
         sim.max_order = max_order
     if max_steps is not None:
-        from dnasim.plantfile import LIMITS, limit_message
+        from dnasim.values import LIMITS, limit_message
 
         if max_steps < 1:
             raise InputError(f"option --max-steps: must be at least 1 (got {max_steps})")
@@ -518,8 +518,9 @@ def _check(plant_file, coolprop_cache):
 def components(name):
     """List the component library; with NAME, one component's ports, parameters
     (units, defaults, ranges) and equations."""
-    from dnasim.plantfile import _registry, _suggest, component_info
+    from dnasim.plantfile import _registry, component_info
     from dnasim.runner import format_component
+    from dnasim.values import suggest as _suggest
 
     try:
         registry = _registry()

@@ -1,7 +1,8 @@
 """The ``dnasim`` program's entry point: the signal handlers first, then the command line.
 
 SIGTERM and SIGINT (Ctrl-C) are caught before anything heavy is imported (this
-module imports only ``os``, ``signal`` and ``sys``), so that a signal at any time
+module imports only ``os``, ``signal``, ``sys`` and ``dnasim.interrupts``, which
+holds the handlers), so that a signal at any time
 gives one line on stderr and exit code 1, never a silent -15 or a traceback.
 
 Until a command is ready to be interrupted, a signal is *held*: it is recorded and
@@ -18,82 +19,22 @@ kept them blocked (and so pending before Python started) is delivered here.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
 import sys
 
+from dnasim.interrupts import (  # noqa: F401  (re-exported: cli uses entry.*)
+    _SIGNALS,
+    Terminated,
+    _state,
+    held,
+    install,
+    installed,
+    release,
+    signal_name,
+)
+
 EXIT_INTERRUPTED = 1  # the command line's "simulation failed or interrupted"
-
-_SIGNALS = (signal.SIGTERM, signal.SIGINT)
-_state = {"holding": False, "pending": None, "installed": False}
-
-
-class Terminated(KeyboardInterrupt):
-    """Raised for SIGTERM, so that a run stops as on Ctrl-C (the solver hands over
-    what it computed, as for KeyboardInterrupt)."""
-
-
-def signal_name(exc: BaseException | int | None) -> str:
-    """ "SIGTERM" or "Ctrl-C" for an exception or a signal number."""
-    if isinstance(exc, Terminated) or exc == signal.SIGTERM:
-        return "SIGTERM"
-    return "Ctrl-C"
-
-
-def _handler(signum, frame):
-    if _state["holding"]:
-        if _state["pending"] is None:
-            _state["pending"] = signum
-        return
-    _raise(signum)
-
-
-def _raise(signum):
-    if signum == signal.SIGTERM:
-        raise Terminated()
-    raise KeyboardInterrupt()
-
-
-def install() -> None:
-    """Catch SIGTERM and SIGINT from now on and hold them until :func:`release`
-    (a second call, from ``python -m dnasim.cli``, keeps a signal already held)."""
-    if _state["installed"]:
-        return
-    _state.update(holding=True, pending=None, installed=True)
-    for s in _SIGNALS:
-        signal.signal(s, _handler)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, _SIGNALS)
-
-
-def installed() -> bool:
-    """True when this process was started through :func:`main` (the handlers are ours)."""
-    return _state["installed"] and signal.getsignal(signal.SIGTERM) is _handler
-
-
-def release() -> None:
-    """Stop holding signals; raise for one that arrived while they were held."""
-    if not _state["holding"]:
-        return
-    _state["holding"] = False
-    pending, _state["pending"] = _state["pending"], None
-    if pending is not None:
-        _raise(pending)
-
-
-@contextlib.contextmanager
-def held():
-    """Hold SIGTERM/SIGINT for the duration (code that must not be interrupted by an
-    exception, e.g. numba's compiler callbacks); a signal that arrived meanwhile is
-    raised at the end. Does nothing when the handlers are not ours or already hold."""
-    if not installed() or _state["holding"]:
-        yield
-        return
-    _state["holding"] = True
-    try:
-        yield
-    finally:
-        release()
 
 
 def _message(what: str) -> str:

@@ -5,6 +5,9 @@ media, the components and the command line can all raise and catch the same
 types without depending on each other.
 """
 
+import re
+from collections.abc import Sequence
+
 
 class DnasimError(Exception):
     """Base class of every error dnasim raises on purpose."""
@@ -42,3 +45,36 @@ class OutputError(DnasimError):
         self.path = path
         self.t_reached = t_reached
         self.rows = rows
+
+
+class Problems:
+    """Collects problems; each is one paragraph naming file, table, key and (with a
+    line index, see ``dnasim.plantfile``) line. ``raise_if_any`` raises one
+    ``PlantError`` whose message joins them, one paragraph each."""
+
+    def __init__(self, path: str, lines=None):
+        self.path = path
+        self.lines = lines
+        self.items: list[str] = []
+
+    def add(self, table: Sequence[str], key: str | None, message: str) -> None:
+        where = [self.path]
+        table = tuple(table)
+        if table:
+            where.append("[" + ".".join(_quote_key(k) for k in table) + "]")
+        if key is not None:
+            where.append(f"key '{key}'")
+        line = self.lines.find(table, key) if self.lines else None
+        if line:
+            where.append(f"line {line}")
+        self.items.append(", ".join(where) + ": " + message)
+
+    def raise_if_any(self) -> None:
+        if self.items:
+            err = PlantError("\n\n".join(self.items))
+            err.errors = list(self.items)
+            raise err
+
+
+def _quote_key(k: str) -> str:
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else '"' + k + '"'

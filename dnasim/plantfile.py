@@ -30,7 +30,6 @@ paragraph per problem; all problems found are reported together.
 
 from __future__ import annotations
 
-import difflib
 import inspect
 import math
 import re
@@ -40,17 +39,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from dnasim.errors import PlantError
-from dnasim.spec import (
-    LIMITS,
-    ComponentSpec,
-    PlantSpec,
-    SimulationSettings,
-    build_plant,
-    limit_message,
-)
-from dnasim.spec import Problems as _Errors
+from dnasim.errors import PlantError, Problems
+from dnasim.spec import ComponentSpec, PlantSpec, SimulationSettings, build_plant
 from dnasim.units import UnitError, parse_unit
+from dnasim.values import (
+    LIMITS,
+    TIME_FUNCTION_TYPES,
+    example,
+    limit_message,
+    param_kind,
+    param_unit,
+    param_value,
+    per_signal,
+    quantity,
+    suggest,
+    type_name,
+)
 
 __all__ = [
     "load_plant",
@@ -71,17 +75,6 @@ __all__ = [
 #: keys of a component table that are not parameters
 RESERVED_KEYS = ("type", "ports", "inputs", "description")
 
-#: time-function tables: type -> (required keys, optional keys); values of keys in
-#: ``_TF_VALUE_KEYS`` are in the parameter's unit, the others are times [s]
-TIME_FUNCTION_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "constant": (("value",), ()),
-    "step": (("t0", "before", "after"), ()),
-    "ramp": (("t0", "t1", "start", "end"), ()),
-    "table": (("times", "values"), ()),
-    "sine": (("mean", "amplitude", "period"), ("phase",)),
-}
-_TF_VALUE_KEYS = {"value", "before", "after", "start", "end", "values", "mean"}
-_TF_DIFFERENCE_KEYS = {"amplitude"}
 
 SIMULATION_KEYS = {
     "t_end": "end time of the simulation [s] (required)",
@@ -117,15 +110,6 @@ class LoadedPlant:
 
 
 # --------------------------------------------------------------------------- errors
-
-
-def _suggest(word: str, choices) -> str:
-    close = difflib.get_close_matches(str(word), list(choices), n=1, cutoff=0.6)
-    if not close:
-        low = {c.lower(): c for c in choices}
-        if str(word).lower() in low:
-            close = [low[str(word).lower()]]
-    return f"; did you mean '{close[0]}'?" if close else ""
 
 
 class _LineIndex:
@@ -237,14 +221,6 @@ def _is_required(p) -> bool:
     return type(d).__name__.upper().startswith("REQUIRED") or repr(d).upper() == "REQUIRED"
 
 
-def _param_kind(p) -> str:
-    return getattr(p, "kind", "number") or "number"
-
-
-def _param_unit(p) -> str:
-    return getattr(p, "unit", "1") or "1"
-
-
 def _port_info(ports) -> list[dict]:
     out = []
     for p in ports or ():
@@ -289,14 +265,14 @@ def component_info(cls) -> dict:
         params.append(
             {
                 "name": p.name,
-                "unit": _param_unit(p),
+                "unit": param_unit(p),
                 "required": _is_required(p),
                 "default": None if _is_required(p) else getattr(p, "default", None),
                 "min": getattr(p, "min", None),
                 "max": getattr(p, "max", None),
                 "doc": getattr(p, "doc", "") or "",
                 "time_function": bool(getattr(p, "time_function", False)),
-                "kind": _param_kind(p),
+                "kind": param_kind(p),
                 "choices": getattr(p, "choices", None),
             }
         )
@@ -377,66 +353,11 @@ def _decode(text: str, path: str) -> dict:
 # --------------------------------------------------------------------------- validation
 
 
-def _type_name(v) -> str:
-    if isinstance(v, bool):
-        return "a boolean"
-    if isinstance(v, int | float):
-        return "a number"
-    if isinstance(v, str):
-        return "a string"
-    if isinstance(v, list):
-        return "an array"
-    if isinstance(v, dict):
-        return "a table"
-    return type(v).__name__
-
-
-def _as_text(v, errors: _Errors, table, key) -> str | None:
+def _as_text(v, errors: Problems, table, key) -> str | None:
     if not isinstance(v, str):
-        errors.add(table, key, f"expected a string, got {_type_name(v)} ({v!r})")
+        errors.add(table, key, f"expected a string, got {type_name(v)} ({v!r})")
         return None
     return v
-
-
-def _quantity(
-    v, unit, errors, table, key, *, difference=False, lenient_difference=False
-) -> float | None:
-    """A number or unit string in ``unit`` (SI); ``None`` after reporting an error.
-
-    ``difference``: the parameter is a temperature difference: "2 K" and
-    "2 delta_degC" are 2 K, "2 degC" (an absolute temperature, 275.15 K) is an error.
-    ``lenient_difference``: a difference where "10 degC" may mean 10 K (the
-    amplitude of a sine next to its mean in degC).
-    """
-    if isinstance(v, dict | list):
-        errors.add(
-            table,
-            key,
-            f"expected a number or a string with a unit such as '{_example(unit)}', "
-            f"got {_type_name(v)}",
-        )
-        return None
-    try:
-        return _convert_value(v, unit, difference, lenient_difference)
-    except UnitError as exc:
-        errors.add(table, key, str(exc))
-        return None
-
-
-def _convert_value(v, unit: str, difference: bool, lenient_difference: bool = False) -> float:
-    from dnasim.units import convert_quantity
-
-    return convert_quantity(v, unit, difference, lenient_difference)
-
-
-def is_difference(cls, p) -> bool:
-    """Whether parameter ``p`` of ``cls`` is a temperature difference (unit "delta_K")."""
-    return _param_unit(p).startswith("delta_")
-
-
-def per_signal(cls, p) -> int:
-    """The power of the measured signal's unit in ``p``'s unit (Kp: -1, setpoint: 1)."""
-    return int(getattr(p, "per_signal", 0) or 0)
 
 
 def input_unit(cls, port) -> str:
@@ -444,172 +365,7 @@ def input_unit(cls, port) -> str:
     return str(getattr(port, "unit", "1") or "1")
 
 
-def param_unit_for(cls, p, signal_units=()) -> str:
-    """The SI unit a plant-file value of ``p`` is converted to: the declared unit,
-    times the measured signal's unit to the power ``per_signal`` (Kp of a
-    temperature controller: 1/K)."""
-    unit = _param_unit(p)
-    if unit.startswith("delta_"):
-        unit = unit[len("delta_") :]
-    k = per_signal(cls, p)
-    su = next((u for u in signal_units if u), None)
-    if k and su is not None and parse_unit(su).dims != parse_unit("1").dims:
-        s_su = su if re.fullmatch(r"[A-Za-z]+", su) else f"({su})"
-        if k > 0:
-            unit = su if unit == "1" else f"({unit}).{s_su}"
-        else:
-            unit = f"{unit}/{s_su}" if re.fullmatch(r"[A-Za-z0-9/]+", unit) else f"({unit})/{s_su}"
-    return unit
-
-
-def _example(unit: str) -> str:
-    return {
-        "Pa": "120 bar",
-        "K": "540 degC",
-        "kg/s": "3.6 t/h",
-        "s": "15 min",
-        "J/kg": "2800 kJ/kg",
-        "m3": "2.5 m3",
-        "m2": "30 m2",
-        "m": "12 m",
-        "W/(m2.K)": "50 W/(m2.K)",
-        "1": "0.5",
-    }.get(unit, f"1 {unit}")
-
-
-def _check_range(x: float, p, errors, table, key, shown) -> None:
-    """``Param.range_problem``: the same check as the Python API's."""
-    problem = p.range_problem(x)
-    if problem is not None:
-        kind, text = problem
-        what = "out of the physical range" if kind == "physical" else "out of range"
-        errors.add(table, key, f"{shown} is {what}: {text}")
-
-
-def _time_function(v: dict, p, errors: _Errors, table, key, unit: str, difference=False):
-    """Build a time function from an inline table ``{type = "step", ...}``; its
-    values are in ``unit``."""
-    from dnasim import timefunctions as tf
-
-    sub = tuple(table) + (key,)
-    kind = v.get("type")
-    if kind is None:
-        errors.add(
-            sub,
-            "type",
-            "a time function needs 'type', one of " + ", ".join(TIME_FUNCTION_TYPES),
-        )
-        return None
-    if not isinstance(kind, str) or kind.lower() not in TIME_FUNCTION_TYPES:
-        errors.add(
-            sub,
-            "type",
-            f"unknown time function {kind!r}; known: "
-            + ", ".join(TIME_FUNCTION_TYPES)
-            + (_suggest(kind, TIME_FUNCTION_TYPES) if isinstance(kind, str) else ""),
-        )
-        return None
-    kind = kind.lower()
-    required, optional = TIME_FUNCTION_TYPES[kind]
-    n0 = len(errors.items)
-    for k in v:
-        if k != "type" and k not in required and k not in optional:
-            errors.add(
-                sub,
-                k,
-                f"unknown key for a {kind} time function; expected "
-                + ", ".join(required + optional)
-                + _suggest(k, required + optional),
-            )
-    for k in required:
-        if k not in v:
-            errors.add(sub, k, f"missing: a {kind} time function needs " + ", ".join(required))
-    if len(errors.items) > n0:
-        return None
-
-    def conv(k, x):
-        if k in ("times",) or k in ("t0", "t1", "period"):
-            return _quantity(x, "s", errors, sub, k)
-        if k == "phase":
-            return _quantity(x, "1", errors, sub, k)
-        return _quantity(
-            x,
-            unit,
-            errors,
-            sub,
-            k,
-            difference=difference,
-            lenient_difference=k in _TF_DIFFERENCE_KEYS and not difference,
-        )
-
-    vals: dict[str, Any] = {}
-    for k in required + optional:
-        if k not in v:
-            continue
-        x = v[k]
-        if k in ("times", "values"):
-            if not isinstance(x, list) or not x:
-                errors.add(sub, k, f"expected a non-empty array, got {_type_name(x)}")
-                continue
-            vals[k] = [conv(k, xi) for xi in x]
-        else:
-            vals[k] = conv(k, x)
-    if len(errors.items) > n0:
-        return None
-    shown = f"the {kind} time function"
-    try:
-        if kind == "constant":
-            f = tf.Constant(vals["value"])
-            checks = [vals["value"]]
-        elif kind == "step":
-            if vals["t0"] < 0:
-                errors.add(sub, "t0", f"the step time must not be negative (got {vals['t0']:g} s)")
-                return None
-            f = tf.Step(vals["t0"], vals["before"], vals["after"])
-            checks = [vals["before"], vals["after"]]
-        elif kind == "ramp":
-            if not vals["t1"] > vals["t0"]:
-                errors.add(
-                    sub,
-                    "t1",
-                    f"a ramp needs t1 > t0 (got t0 = {vals['t0']:g} s, t1 = {vals['t1']:g} s)",
-                )
-                return None
-            f = tf.Ramp(vals["t0"], vals["t1"], vals["start"], vals["end"])
-            checks = [vals["start"], vals["end"]]
-        elif kind == "table":
-            times, values = vals["times"], vals["values"]
-            if len(times) != len(values):
-                errors.add(
-                    sub,
-                    "values",
-                    f"'times' has {len(times)} entries but 'values' has {len(values)}",
-                )
-                return None
-            if any(b <= a for a, b in zip(times, times[1:], strict=False)):
-                errors.add(sub, "times", "the times of a table must increase strictly")
-                return None
-            f = tf.Table(times, values)
-            checks = list(values)
-        else:  # sine
-            if not vals["period"] > 0:
-                errors.add(sub, "period", f"the period must be positive (got {vals['period']:g} s)")
-                return None
-            args = (vals["mean"], vals["amplitude"], vals["period"])
-            f = tf.Sine(*args, vals.get("phase", 0.0) or 0.0)
-            checks = [vals["mean"] - abs(vals["amplitude"]), vals["mean"] + abs(vals["amplitude"])]
-    except (ValueError, TypeError) as exc:  # the time function's own validation
-        errors.add(table, key, f"invalid {kind} time function: {exc}")
-        return None
-    for x in checks:
-        n1 = len(errors.items)
-        _check_range(x, p, errors, table, key, f"a value of {shown}")
-        if len(errors.items) > n1:
-            break
-    return f
-
-
-def _simulation(data, errors: _Errors) -> SimulationSettings:
+def _simulation(data, errors: Problems) -> SimulationSettings:
     s = SimulationSettings()
     table = ("simulation",)
     sim = data.get("simulation")
@@ -617,7 +373,7 @@ def _simulation(data, errors: _Errors) -> SimulationSettings:
         errors.add((), "simulation", "missing the [simulation] table (at least t_end = ...)")
         return s
     if not isinstance(sim, dict):
-        errors.add((), "simulation", f"expected a table, got {_type_name(sim)}")
+        errors.add((), "simulation", f"expected a table, got {type_name(sim)}")
         return s
     for k in sim:
         if k not in SIMULATION_KEYS:
@@ -626,13 +382,13 @@ def _simulation(data, errors: _Errors) -> SimulationSettings:
                 k,
                 "unknown key; [simulation] has "
                 + ", ".join(SIMULATION_KEYS)
-                + _suggest(k, SIMULATION_KEYS),
+                + suggest(k, SIMULATION_KEYS),
             )
     if "t_end" not in sim:
         errors.add(table, "t_end", 'missing: the end time of the simulation, e.g. t_end = "15 min"')
     for k in ("t_end", "t_start", "output_interval", "max_step"):
         if k in sim:
-            x = _quantity(sim[k], "s", errors, table, k)
+            x = quantity(sim[k], "s", errors, table, k)
             if x is not None:
                 if k == "t_start" and x < 0:
                     errors.add(table, k, f"must not be negative (got {x:g} s)")
@@ -658,7 +414,7 @@ def _simulation(data, errors: _Errors) -> SimulationSettings:
             s.max_steps = x
     for k, lo, hi in (("rtol", 0.0, 1.0), ("atol_scaled", 0.0, math.inf)):
         if k in sim:
-            x = _quantity(sim[k], "1", errors, table, k)
+            x = quantity(sim[k], "1", errors, table, k)
             if x is not None:
                 if not lo < x < hi:
                     errors.add(table, k, f"must be > 0{' and < 1' if hi == 1 else ''} (got {x:g})")
@@ -692,7 +448,7 @@ def _is_tabular(name: str) -> bool:
     return backend.startswith(("BICUBIC", "TTSE"))
 
 
-def _check_medium(name: str, errors: _Errors, table, key) -> None:
+def _check_medium(name: str, errors: Problems, table, key) -> None:
     """An unknown fluid name is reported here, with its place in the file."""
     try:
         from dnasim.media import get_medium
@@ -743,7 +499,7 @@ def _measured_first(inputs: dict) -> list:
     return [inputs[k] for k in keys]
 
 
-def _spec_builder(comps: dict, registry, errors: _Errors):
+def _spec_builder(comps: dict, registry, errors: Problems):
     """``spec_of(name)``: the ComponentSpec of component ``name`` (None when invalid),
     built once. A component whose parameters are in the unit of its measured signal
     (a controller's Kp, set point) needs that unit first: a signal output's unit
@@ -817,7 +573,7 @@ def _spec_builder(comps: dict, registry, errors: _Errors):
 
 
 def _component(
-    name, table_data, registry, errors: _Errors, signal_units=()
+    name, table_data, registry, errors: Problems, signal_units=()
 ) -> ComponentSpec | None:
     table = ("components", name)
     if not _NAME_OK.match(name):
@@ -832,7 +588,7 @@ def _component(
         errors.add(
             ("components",),
             name,
-            f"expected a table [components.{name}], got {_type_name(table_data)}",
+            f"expected a table [components.{name}], got {type_name(table_data)}",
         )
         return None
     if "type" not in table_data:
@@ -845,21 +601,21 @@ def _component(
         return None
     tname = table_data["type"]
     if not isinstance(tname, str):
-        errors.add(table, "type", f"expected the name of a component type, got {_type_name(tname)}")
+        errors.add(table, "type", f"expected the name of a component type, got {type_name(tname)}")
         return None
     cls = registry.get(tname)
     if cls is None:
         errors.add(
             table,
             "type",
-            f"unknown component type {tname!r}{_suggest(tname, registry)} "
+            f"unknown component type {tname!r}{suggest(tname, registry)} "
             f"(known: {', '.join(sorted(registry))}; see `dnasim components`)",
         )
         return None
     spec = ComponentSpec(name=name, type=tname, cls=cls)
     desc = table_data.get("description", "")
     if not isinstance(desc, str):
-        errors.add(table, "description", f"expected a string, got {_type_name(desc)}")
+        errors.add(table, "description", f"expected a string, got {type_name(desc)}")
     else:
         spec.description = desc
     params = {p.name: p for p in params_of(cls)}
@@ -873,7 +629,7 @@ def _component(
             continue
         p = params.get(key)
         if p is None:
-            hint = _suggest(key, list(params) + list(RESERVED_KEYS))
+            hint = suggest(key, list(params) + list(RESERVED_KEYS))
             if key in fports:
                 hint = f"; '{key}' is a fluid port: write ports = {{ {key} = \"node\" }}"
             elif key in sin:
@@ -892,19 +648,19 @@ def _component(
             # reported by the network check; unit errors here would only follow from it
             unchecked = True
             continue
-        spec.params[key] = _param_value(value, p, errors, table, key, signal_units, cls)
+        spec.params[key] = param_value(value, p, errors, table, key, signal_units, cls)
         if key == "medium" and isinstance(spec.params[key], str):
             _check_medium(spec.params[key], errors, table, key)
     for pname, p in params.items():
         if pname not in table_data and _is_required(p):
-            unit = _param_unit(p)
+            unit = param_unit(p)
             doc = getattr(p, "doc", "")
             errors.add(
                 table,
                 pname,
                 f"missing required parameter of {tname}"
                 + (f" ({doc})" if doc else "")
-                + (f', e.g. {pname} = "{_example(unit)}"' if _param_kind(p) == "number" else ""),
+                + (f', e.g. {pname} = "{example(unit)}"' if param_kind(p) == "number" else ""),
             )
     if len(errors.items) == n0 and not unchecked:
         # the parameters are valid: build the component now (cheap, no numerics) so
@@ -927,7 +683,7 @@ def _component(
         errors.add(
             table,
             "ports",
-            f"expected a table like ports = {{ {_port_example(fports)} }}, got {_type_name(ports)}",
+            f"expected a table like ports = {{ {_port_example(fports)} }}, got {type_name(ports)}",
         )
         ports = {}
     for port, node in ports.items():
@@ -947,12 +703,12 @@ def _component(
                 errors.add(
                     sub,
                     port,
-                    f"{tname} has no fluid port '{port}'{_suggest(port, fports)} "
+                    f"{tname} has no fluid port '{port}'{suggest(port, fports)} "
                     f"(fluid ports: {', '.join(fports) or 'none'})",
                 )
             continue
         if not isinstance(node, str) or not node:
-            errors.add(sub, port, f"expected a node name (a string), got {_type_name(node)}")
+            errors.add(sub, port, f"expected a node name (a string), got {type_name(node)}")
             continue
         if not _NAME_OK.match(node):
             errors.add(sub, port, f"invalid node name {node!r}: use letters, digits, '_' and '-'")
@@ -973,7 +729,7 @@ def _component(
             table,
             "inputs",
             f'expected a table like inputs = {{ {sin[0] if sin else "u"} = "sensor.T" }}, '
-            f"got {_type_name(inputs)}",
+            f"got {type_name(inputs)}",
         )
         inputs = {}
     for inp, src in inputs.items():
@@ -1010,7 +766,7 @@ def _component(
                 errors.add(
                     sub,
                     inp,
-                    f"{tname} has no signal input '{inp}'{_suggest(inp, sin)} "
+                    f"{tname} has no signal input '{inp}'{suggest(inp, sin)} "
                     f"(signal inputs: {', '.join(sin) or 'none'})",
                 )
             continue
@@ -1033,57 +789,7 @@ def _component(
     return spec
 
 
-def _param_value(value, p, errors, table, key, signal_units=(), cls=None):
-    kind = _param_kind(p)
-    unit = param_unit_for(cls, p, signal_units)
-    difference = is_difference(cls, p)
-    if kind == "string":
-        if not isinstance(value, str):
-            errors.add(table, key, f"expected a string, got {_type_name(value)} ({value!r})")
-            return None
-        choices = getattr(p, "choices", None)
-        if choices and value not in choices:
-            errors.add(
-                table,
-                key,
-                f"expected one of {', '.join(map(str, choices))}, "
-                f"got {value!r}{_suggest(value, choices)}",
-            )
-        return value
-    if kind == "bool":
-        if not isinstance(value, bool):
-            errors.add(table, key, f"expected true or false, got {_type_name(value)} ({value!r})")
-            return None
-        return value
-    if kind not in ("number", "float", "int", "integer"):
-        return value  # unknown kind: hand over as it is, the component validates
-    if isinstance(value, dict):
-        if not getattr(p, "time_function", False):
-            errors.add(
-                table,
-                key,
-                f"{p.name} is a constant parameter; a time function ({{ type = ... }}) is "
-                "allowed only for boundary values and setpoints",
-            )
-            return None
-        return _time_function(value, p, errors, table, key, unit, difference)
-    x = _quantity(value, unit, errors, table, key, difference=difference)
-    if x is None:
-        return None
-    if kind in ("int", "integer"):
-        if x != int(x):
-            errors.add(table, key, f"expected an integer, got {value!r}")
-            return None
-        x = int(x)
-        limit = LIMITS.get(p.name, LIMITS["count"])
-        if x > limit:
-            errors.add(table, key, limit_message(p.name, x, limit))
-            return None
-    _check_range(x, p, errors, table, key, repr(value) if isinstance(value, str) else f"{x:g}")
-    return x
-
-
-def _network(specs: list[ComponentSpec], errors: _Errors, broken: dict | None = None) -> None:
+def _network(specs: list[ComponentSpec], errors: Problems, broken: dict | None = None) -> None:
     """Nodes with one port, signals from unknown components or outputs, signal
     dimensions. ``broken``: raw tables of components already reported as invalid;
     what follows only from their absence (their nodes, their outputs) is not
@@ -1138,7 +844,7 @@ def _network(specs: list[ComponentSpec], errors: _Errors, broken: dict | None = 
                         f"no component named '{comp}' (and no node) for the signal source "
                         f"'{src}', which must be a component's output or variable, or a "
                         "node's p, h or T"
-                        f"{_suggest(comp, list(by_name) + list(node_members))}",
+                        f"{suggest(comp, list(by_name) + list(node_members))}",
                     )
                 continue
             outs = other.signal_outputs
@@ -1241,7 +947,7 @@ def _plugin_imports(v, path, errors) -> list[str]:
 
 def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> PlantSpec:
     """Validate decoded TOML; every problem becomes part of one ``PlantError``."""
-    errors = _Errors(str(path), _LineIndex(text) if text is not None else None)
+    errors = Problems(str(path), _LineIndex(text) if text is not None else None)
     if not isinstance(data, dict):
         errors.add((), None, "a plant file is a TOML document of tables")
         errors.raise_if_any()
@@ -1251,7 +957,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
                 (),
                 k,
                 f"unknown top-level key or table; expected [plant], [simulation] and "
-                f"[components.<name>]{_suggest(k, _TOP_LEVEL)}",
+                f"[components.<name>]{suggest(k, _TOP_LEVEL)}",
             )
     name = Path(str(path)).stem
     description = ""
@@ -1259,7 +965,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
     imports: list[str] = []
     meta = data.get("plant", {})
     if not isinstance(meta, dict):
-        errors.add((), "plant", f"expected a table [plant], got {_type_name(meta)}")
+        errors.add((), "plant", f"expected a table [plant], got {type_name(meta)}")
         meta = {}
     for k, v in meta.items():
         if k == "name":
@@ -1277,7 +983,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
                 ("plant",),
                 k,
                 "unknown key; [plant] has name, description, medium and import"
-                + _suggest(k, ("name", "description", "medium", "import")),
+                + suggest(k, ("name", "description", "medium", "import")),
             )
     sim = _simulation(data, errors)
     comps = data.get("components")
@@ -1287,9 +993,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
             (), "components", 'no components: add tables [components.<name>] with type = "..."'
         )
     elif not isinstance(comps, dict):
-        errors.add(
-            (), "components", f"expected tables [components.<name>], got {_type_name(comps)}"
-        )
+        errors.add((), "components", f"expected tables [components.<name>], got {type_name(comps)}")
     else:
         if not comps:
             errors.add(

@@ -10,12 +10,11 @@ ranges) and wires them in a ``Plant``.
 from __future__ import annotations
 
 import math
-import re
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from dnasim.errors import PlantError
+from dnasim.errors import PlantError, Problems
+from dnasim.values import LIMITS, limit_message
 
 __all__ = [
     "LIMITS",
@@ -27,26 +26,6 @@ __all__ = [
     "limit_message",
     "output_point_count",
 ]
-
-#: Upper limits of counts, in one place: a plant file asking for more is refused
-#: before anything is allocated, with the value and the limit in the message.
-#: ``count`` applies to every integer parameter not listed by name.
-LIMITS: dict[str, int] = {
-    "n_volumes": 5000,  # control volumes of one pipe
-    "n_sections": 1000,  # sections of one heat exchanger
-    "n_inlets": 64,  # inlets of one mixer
-    "n_outlets": 64,  # outlets of one splitter
-    "count": 10_000,  # any other integer parameter
-    "cells": 20_000,  # volumes and sections of the whole plant together
-    "components": 2_000,  # components of one plant
-    "output_points": 10_000_000,  # rows of results.csv from output_interval
-    "max_steps": 100_000_000,  # [simulation] max_steps / --max-steps
-}
-
-
-def limit_message(what: str, value, limit) -> str:
-    """``n_volumes = 100000 is above the limit of 1000``."""
-    return f"{what} = {value:g} is above the limit of {limit:g}"
 
 
 def output_point_count(t_start: float, t_end: float, interval: float) -> float:
@@ -203,35 +182,3 @@ def build_plant(spec: PlantSpec):
     except AttributeError:  # a Plant with __slots__: settings stay in LoadedPlant
         pass
     return plant
-
-
-class Problems:
-    """Collects problems; each is one paragraph naming file, table, key and (with a
-    line index, see ``dnasim.plantfile``) line."""
-
-    def __init__(self, path: str, lines=None):
-        self.path = path
-        self.lines = lines
-        self.items: list[str] = []
-
-    def add(self, table: Sequence[str], key: str | None, message: str) -> None:
-        where = [self.path]
-        table = tuple(table)
-        if table:
-            where.append("[" + ".".join(_quote_key(k) for k in table) + "]")
-        if key is not None:
-            where.append(f"key '{key}'")
-        line = self.lines.find(table, key) if self.lines else None
-        if line:
-            where.append(f"line {line}")
-        self.items.append(", ".join(where) + ": " + message)
-
-    def raise_if_any(self) -> None:
-        if self.items:
-            err = PlantError("\n\n".join(self.items))
-            err.errors = list(self.items)
-            raise err
-
-
-def _quote_key(k: str) -> str:
-    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else '"' + k + '"'

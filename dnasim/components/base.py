@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dnasim.components.physics import M_EPS_REL
-from dnasim.errors import PlantError
+from dnasim.errors import PlantError, Problems
 from dnasim.timefunctions import TimeFunction, as_time_function
 
 __all__ = [
@@ -568,18 +568,17 @@ class Component:
         signal (``Param.per_signal``: a controller's gain "0.5 1/K" or "2 %/bar", its
         set point "440 degC"), now that ``signal_units`` (the units of the signals
         linked into this component) are known. The same conversion and checks as a
-        plant file's (``dnasim.plantfile``): "0.02 degC" for a gain is refused.
+        plant file's (``dnasim.values.param_value``): "0.02 degC" for a gain is refused.
         Raises PlantError naming the component and the parameter."""
         if not self.signal_unit_values:
             return
-        from dnasim.plantfile import _param_value
-        from dnasim.spec import Problems
+        from dnasim.values import param_value
 
         known = {p.name: p for p in self.PARAMS}
         errors = Problems(f"component '{self.name}' ({type(self).__name__})")
         for name, raw in self.signal_unit_values.items():
             p = known[name]
-            x = _param_value(raw, p, errors, (), name, list(signal_units), type(self))
+            x = param_value(raw, p, errors, (), name, list(signal_units), type(self))
             if x is not None:
                 self.params[name] = self._validate(p, x)
         errors.raise_if_any()

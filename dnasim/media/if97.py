@@ -152,7 +152,7 @@ def _load_compiled_kernels() -> None:
     exceptions in callbacks) and the run would go on."""
     if _load_compiled_kernels.done:
         return
-    from dnasim.entry import held
+    from dnasim.interrupts import held
 
     with held():
         p, h = np.array([1e6]), np.array([1e6])
