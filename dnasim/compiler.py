@@ -26,6 +26,8 @@ ports carry one fluid).
 
 from __future__ import annotations
 
+from copy import copy as shallow_copy
+
 from dnasim.errors import PlantError
 from dnasim.structure import StructureReport, analyse_graph, analyse_system
 
@@ -214,15 +216,11 @@ def signal_sources(plant):
     if not temps:
         return plant, []
     from dnasim.components.sensor import TemperatureSensor
-    from dnasim.plant import Plant
 
-    copy = Plant(plant.name, medium=plant.default_medium)
+    copy = shallow_copy(plant)  # the same class and attributes; new dicts below
     copy.components = dict(plant.components)
     copy.connections = dict(plant.connections)
     copy.links = dict(plant.links)
-    copy._duplicates = list(plant.duplicates)
-    if hasattr(plant, "simulation"):
-        copy.simulation = plant.simulation
     for node in temps:
         name = node_sensor_name(node)
         copy.components[name] = TemperatureSensor(name, T_lag=0.0)

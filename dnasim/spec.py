@@ -10,7 +10,7 @@ ranges) and wires them in a ``Plant``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from dnasim.errors import PlantError, Problems
@@ -177,8 +177,7 @@ def build_plant(spec: PlantSpec):
             except PlantError as exc:
                 errors.add(("components", c.name, "inputs"), inp, str(exc))
     errors.raise_if_any()
-    try:
-        plant.simulation = spec.simulation
-    except AttributeError:  # a Plant with __slots__: settings stay in LoadedPlant
-        pass
+    # the plant's own copy of the settings (``Plant.simulate`` uses them): the plant
+    # keeps no reference into the spec it was built from
+    plant.simulation = replace(spec.simulation)
     return plant
