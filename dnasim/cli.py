@@ -13,9 +13,9 @@ import signal
 import sys
 
 if __name__ == "__main__":  # python -m dnasim.cli: the signal handlers before anything else
-    from dnasim import entry as _entry
+    from dnasim.interrupts import install
 
-    _entry.install()
+    install()
 
 import os
 import traceback
@@ -23,8 +23,8 @@ from pathlib import Path
 
 import click
 
-from dnasim.entry import Terminated as _Terminate
-from dnasim.entry import release as _release_signals
+from dnasim.interrupts import Terminated as _Terminate
+from dnasim.interrupts import release as _release_signals
 
 EXIT_OK = 0
 EXIT_SIMULATION = 1
@@ -140,9 +140,9 @@ def _catch_sigterm():
     """Turn SIGTERM into ``_Terminate`` from now on; returns the old handler
     (None when not in the main thread, e.g. inside a test runner thread, or when
     ``dnasim.entry`` already installed its handlers: they raise the same)."""
-    from dnasim import entry
+    from dnasim.interrupts import installed
 
-    if entry.installed():
+    if installed():
         return None
     try:
         return signal.signal(signal.SIGTERM, _on_sigterm)
@@ -824,4 +824,6 @@ def linearize(plant_file, inputs, outputs, at, out_dir, all_states):
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(_entry.main())
+    from dnasim.entry import main as _main
+
+    sys.exit(_main())

@@ -62,15 +62,14 @@ class Medium(ABC):
     #: :meth:`saturation_enthalpies` and :meth:`h_px`).
     condensable: bool = False
 
-    #: (fluid, backend) when the instance came from ``get_medium``: it then pickles
+    #: ``(get_medium, (fluid, backend))`` when the instance came from ``get_medium``
+    #: (set there, so that this module need not import the registry): it then pickles
     #: as that call and unpickles as the shared instance (no backend state pickled)
-    registry_args: tuple[str, str] | None = None
+    registry_call: tuple | None = None
 
     def __reduce_ex__(self, protocol):
-        if self.registry_args is not None:
-            from dnasim.media.registry import get_medium
-
-            return (get_medium, self.registry_args)
+        if self.registry_call is not None:
+            return self.registry_call
         return super().__reduce_ex__(protocol)
 
     def __init__(self, name: str, backend: str, *, cache_size: int = 4096) -> None:

@@ -154,7 +154,7 @@ def get_medium(fluid: str, backend: str | None = None) -> Medium:
         medium = _INSTANCES.get((mix.name, "NASA7"))
         if medium is None:
             medium = _INSTANCES[(mix.name, "NASA7")] = mix
-            medium.registry_args = (name, "NASA7")
+            medium.registry_call = (get_medium, (name, "NASA7"))
         return medium
     canon = canonical_fluid_name(name)
     if backend is None:
@@ -165,7 +165,7 @@ def get_medium(fluid: str, backend: str | None = None) -> Medium:
     medium = _INSTANCES.get(key)
     if medium is None:
         medium = _create(canon, b)
-        medium.registry_args = key
+        medium.registry_call = (get_medium, key)
         _INSTANCES[key] = medium
     return medium
 

@@ -1,0 +1,187 @@
+"""The stages import one way (issue 8, docs/architecture.md).
+
+Every module of the package is parsed with ``ast`` (nothing is imported), and every
+``import`` statement in it is read, also those inside functions (the lazy imports
+that keep ``dnasim --help`` fast). The stages below are in import order: a module
+may import modules of its own stage and of earlier stages only, never a later one.
+A stage is a list of modules; a package named there holds all its submodules.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+from pathlib import Path
+
+import networkx as nx
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "dnasim"
+
+#: the stages, earliest first (docs/architecture.md has one line per stage)
+STAGES: list[tuple[str, list[str]]] = [
+    ("foundation", ["dnasim.errors", "dnasim.interrupts", "dnasim.timefunctions"]),
+    ("units", ["dnasim.units"]),
+    ("values", ["dnasim.values"]),
+    ("media", ["dnasim.media"]),
+    ("components", ["dnasim.components"]),
+    ("plugins", ["dnasim.plugins"]),
+    ("signals", ["dnasim.signals"]),
+    ("graph", ["dnasim.graph"]),
+    ("system", ["dnasim.system", "dnasim.structure"]),
+    ("compiler", ["dnasim.compiler"]),
+    ("solver", ["dnasim.solver", "dnasim.initialization", "dnasim.initial_guess"]),
+    ("start", ["dnasim.start"]),
+    ("results", ["dnasim.results", "dnasim.output", "dnasim.sinks"]),
+    ("backends", ["dnasim.backends"]),
+    ("simulation", ["dnasim.simulation"]),
+    ("plant", ["dnasim.plant"]),
+    ("spec", ["dnasim.spec"]),
+    ("plant files", ["dnasim.plantfile", "dnasim.examples"]),
+    ("cases", ["dnasim.cases"]),
+    ("runner", ["dnasim.runner", "dnasim.plots", "dnasim.linearize", "dnasim.testing"]),
+    ("tools", ["dnasim.sweeps", "dnasim.report", "dnasim.reference"]),
+    ("command line", ["dnasim.cli", "dnasim.entry", "dnasim.__main__", "dnasim"]),
+]
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def all_modules() -> dict[str, Path]:
+    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def imports_of(name: str, path: Path, modules) -> list[tuple[str, int]]:
+    """(imported dnasim module, line) for every import statement in the file,
+    at any depth. ``from dnasim.x import y`` imports ``dnasim.x.y`` when that is a
+    module, else ``dnasim.x``; relative imports are resolved against the package."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = []
+    for node in _walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            for a in node.names:
+                sub = f"{mod}.{a.name}"
+                out.append((sub if sub in modules else mod, node.lineno))
+    return [(m, line) for m, line in out if m == "dnasim" or m.startswith("dnasim.")]
+
+
+def _is_main_block(node) -> bool:
+    """``if __name__ == "__main__":``: what runs when the file is run as a program
+    (``python -m dnasim.cli``), not a dependency of the module."""
+    t = node.test if isinstance(node, ast.If) else None
+    return (
+        isinstance(t, ast.Compare)
+        and isinstance(t.left, ast.Name)
+        and t.left.id == "__name__"
+        and any(isinstance(c, ast.Constant) and c.value == "__main__" for c in t.comparators)
+    )
+
+
+def _walk(tree):
+    """Every node of ``tree`` (functions and classes included), except the insides
+    of ``if __name__ == "__main__":`` blocks."""
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        yield node
+        if not _is_main_block(node):
+            todo.extend(ast.iter_child_nodes(node))
+
+
+def stage_of(module: str) -> int:
+    """Index of the stage holding ``module`` (the longest listed prefix)."""
+    best, index = "", None
+    for i, (_, names) in enumerate(STAGES):
+        for n in names:
+            if (module == n or module.startswith(n + ".")) and len(n) > len(best):
+                best, index = n, i
+    if index is None:
+        raise AssertionError(f"module {module} is in no stage: add it to STAGES")
+    return index
+
+
+@functools.cache
+def import_graph() -> nx.DiGraph:
+    modules = all_modules()
+    g = nx.DiGraph()
+    for name, path in modules.items():
+        g.add_node(name)
+        for target, line in imports_of(name, path, modules):
+            if target != name:
+                g.add_edge(name, target, line=line, path=path)
+    return g
+
+
+def test_every_module_is_in_a_stage():
+    for name in all_modules():
+        stage_of(name)  # raises naming the module
+
+
+def test_no_module_imports_a_later_stage():
+    g = import_graph()
+    bad = []
+    for src, dst, data in g.edges(data=True):
+        a, b = stage_of(src), stage_of(dst)
+        if b > a:
+            where = f"{data['path'].relative_to(PACKAGE.parent)}:{data['line']}"
+            bad.append(
+                f"{where}: {src} (stage '{STAGES[a][0]}') imports {dst} (later stage "
+                f"'{STAGES[b][0]}')"
+            )
+    assert not bad, "imports against the stage order:\n" + "\n".join(sorted(bad))
+
+
+def test_no_import_cycle():
+    # within a stage imports may go either way; still no two modules import each other,
+    # directly or round a cycle (a package's __init__ and its own submodules excepted:
+    # importing a submodule runs the package first, and packages re-export)
+    g = import_graph()
+    g.remove_edges_from(
+        [(a, b) for a, b in g.edges if b.startswith(a + ".") or a.startswith(b + ".")]
+    )
+    cycles = [sorted(c) for c in nx.strongly_connected_components(g) if len(c) > 1]
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def test_the_check_finds_a_back_import(tmp_path):
+    # the check can fail: a lazy import of the simulation inside a function of a
+    # component module is found, at its line, and it is against the stage order
+    source = (PACKAGE / "components" / "valve.py").read_text()
+    fake = tmp_path / "valve.py"
+    fake.write_text(source + "\n\ndef f():\n    from dnasim.simulation import simulate\n")
+    found = imports_of("dnasim.components.valve", fake, all_modules())
+    assert ("dnasim.simulation", source.count("\n") + 4) in found
+    assert stage_of("dnasim.simulation") > stage_of("dnasim.components.valve")
+    # and one under `if __name__ == "__main__":` is not a dependency of the module
+    fake.write_text(source + '\nif __name__ == "__main__":\n    import dnasim.cli\n')
+    assert "dnasim.cli" not in [m for m, _ in imports_of("x", fake, all_modules())]
+
+
+@pytest.mark.parametrize(
+    ("module", "forbidden"),
+    [
+        ("dnasim.components.base", "dnasim.plantfile"),
+        ("dnasim.components.base", "dnasim.spec"),
+        ("dnasim.graph", "dnasim.compiler"),
+        ("dnasim.graph", "dnasim.simulation"),
+        ("dnasim.system", "dnasim.graph"),
+        ("dnasim.system", "dnasim.plant"),
+        ("dnasim.results", "dnasim.system"),
+        ("dnasim.media.if97", "dnasim.entry"),
+    ],
+)
+def test_known_back_references_are_gone(module, forbidden):
+    g = import_graph()
+    assert not g.has_edge(module, forbidden)
