@@ -1,9 +1,12 @@
 """The stages PlantSpec -> Plant -> compile() -> System -> simulate() -> Results."""
 
+import gc
+import io
 import os
 import pickle
 import subprocess
 import sys
+import types
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -14,12 +17,51 @@ import dnasim
 from dnasim.compiler import compile as compile_plant
 from dnasim.errors import DAEError
 from dnasim.examples import air_pipe_plant, attemperator_plant
+from dnasim.graph import PlantGraph
 from dnasim.plantfile import load
+from dnasim.results import Results
 from dnasim.simulation import NordsieckBDF, simulate
+from dnasim.spec import ComponentSpec, PlantSpec
 from dnasim.start import initial_values
+from dnasim.system import System
 from dnasim.timefunctions import Step
 
 ROOT = Path(__file__).resolve().parent.parent
+
+
+def pickled_types(obj) -> set[type]:
+    """The type of every object a pickle of ``obj`` writes (``persistent_id`` is
+    called once per object the pickler meets)."""
+    seen = set()
+
+    class Scan(pickle.Pickler):
+        def persistent_id(self, o):
+            seen.add(type(o))
+
+    Scan(io.BytesIO()).dump(obj)
+    return seen
+
+
+def reachable(obj):
+    """Every object reachable from ``obj`` through references (a function's closure
+    cells and a bound method's ``__self__``; not classes, modules or globals)."""
+    seen, todo = set(), [obj]
+    while todo:
+        o = todo.pop()
+        if id(o) in seen or isinstance(o, type | types.ModuleType):
+            continue
+        seen.add(id(o))
+        yield o
+        if isinstance(o, types.FunctionType):
+            todo.extend(c.cell_contents for c in o.__closure__ or ())
+        elif isinstance(o, types.MethodType):
+            todo.append(o.__self__)
+        else:
+            todo.extend(gc.get_referents(o))
+
+
+def holds(obj, *classes) -> bool:
+    return any(isinstance(o, classes) for o in reachable(obj))
 
 
 def stepped_air_pipe():
@@ -65,6 +107,13 @@ def test_results_pickle_round_trip(stepped):
         np.testing.assert_array_equal(back[n], res[n])
     np.testing.assert_array_equal(back.restart, res.restart)
     assert back.events == res.events and back.success
+    # no back-reference in the pickle: no System, no plant, no spec, no component
+    written = pickled_types(res)
+    assert not [t for t in written if issubclass(t, System | PlantGraph | PlantSpec)]
+    assert not [t for t in written if t.__module__.startswith("dnasim.components")]
+    # and, once its outputs are read, the live Results holds no System either (before,
+    # the lazy output rows hold it: docs/architecture.md, Results)
+    assert not holds(res, System, PlantGraph)
 
 
 def test_system_pickle_round_trip():
@@ -78,6 +127,9 @@ def test_system_pickle_round_trip():
     assert [e(1.0, y0, yp0) for e in back.events] == g
     # media unpickle as the shared registry instances
     assert back.node_media == system.node_media
+    # the System pickles without the plant it was compiled from, or its spec
+    assert not [t for t in pickled_types(system) if issubclass(t, PlantGraph | PlantSpec)]
+    assert not [t for t in pickled_types(system) if issubclass(t, Results)]
 
 
 def test_spec_pickle_round_trip():
@@ -85,12 +137,27 @@ def test_spec_pickle_round_trip():
     back = pickle.loads(pickle.dumps(spec))
     assert back.name == spec.name and back.simulation == spec.simulation
     assert [c.params for c in back.components] == [c.params for c in spec.components]
+    # plain data: no plant, no System (a spec is the first stage)
+    assert not [t for t in pickled_types(spec) if issubclass(t, PlantGraph | System | Results)]
 
 
 def test_system_has_no_reference_to_the_plant():
     plant = air_pipe_plant(1)
     system = compile_plant(plant)
     assert all(v is not plant for v in vars(system).values())
+    assert not holds(system, PlantGraph)
+
+
+def test_plant_holds_no_spec_system_or_results():
+    # the data flows one way: a simulated plant keeps nothing of the later stages, a
+    # plant built from a spec nothing of the spec (it has its own [simulation] copy)
+    loaded = load(ROOT / "plants" / "air_pipe.toml")
+    plant = loaded.plant
+    res = plant.simulate(t_end=1.0)
+    assert res.success
+    assert not holds(plant, System, Results, PlantSpec, ComponentSpec)
+    assert plant.simulation == loaded.spec.simulation
+    assert plant.simulation is not loaded.spec.simulation
 
 
 def test_modes_live_in_the_system_not_the_component():
@@ -143,6 +210,26 @@ def test_commands_on_air_do_not_import_coolprop(args):
         "    runpy.run_module('dnasim.cli', run_name='__main__')\n"
         "except SystemExit as e:\n"
         "    assert not e.code, e.code\n"
+        "sys.stderr.write('COOLPROP=%s' % ('CoolProp' in sys.modules))\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        timeout=120,
+    )
+    assert "COOLPROP=False" in out.stderr, out.stderr[-2000:]
+
+
+def test_python_api_on_air_does_not_import_coolprop():
+    # the same through the Python API: load, check, compile and simulate an air plant
+    code = (
+        "import sys, dnasim\n"
+        "plant = dnasim.load_plant('plants/air_pipe.toml')\n"
+        "assert plant.check().ok\n"
+        "assert plant.simulate(t_end=5.0).success\n"
         "sys.stderr.write('COOLPROP=%s' % ('CoolProp' in sys.modules))\n"
     )
     out = subprocess.run(
