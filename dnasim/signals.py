@@ -26,6 +26,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from dnasim.values import suggest as _suggest
+
 __all__ = [
     "NODE_QUANTITIES",
     "Source",
@@ -132,13 +134,6 @@ def resolve(owner: str, ref: str, component=None, is_node: bool = False) -> Sour
             "gives p [Pa], h [J/kg] and T [K]"
         )
     return None  # neither: the caller names what exists
-
-
-def _suggest(word, choices) -> str:
-    import difflib
-
-    close = difflib.get_close_matches(str(word), list(choices), n=1, cutoff=0.6)
-    return f"; did you mean '{close[0]}'?" if close else ""
 
 
 def dimension_problem(
