@@ -144,14 +144,11 @@ def test_no_module_imports_a_later_stage():
 
 
 def test_no_import_cycle():
-    # within a stage imports may go either way; still no two modules import each other,
-    # directly or round a cycle (a package's __init__ and its own submodules excepted:
-    # importing a submodule runs the package first, and packages re-export)
-    g = import_graph()
-    g.remove_edges_from(
-        [(a, b) for a, b in g.edges if b.startswith(a + ".") or a.startswith(b + ".")]
-    )
-    cycles = [sorted(c) for c in nx.strongly_connected_components(g) if len(c) > 1]
+    # within a stage imports may go either way; still no module imports itself round a
+    # cycle, lazy imports and packages' __init__ included (at 6533d66 one cycle ran
+    # through 34 modules: components, media, compiler, system, plant, spec, plantfile,
+    # plugins, runner, sweeps, cases, cli and entry)
+    cycles = [sorted(c) for c in nx.strongly_connected_components(import_graph()) if len(c) > 1]
     assert not cycles, f"import cycles: {cycles}"
 
 
