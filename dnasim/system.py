@@ -140,7 +140,10 @@ class PlantEvent:
         b = self.block
         x, xp = b.local(y), b.local(yp)
         x0 = x.data.copy()
-        self.switch.action(t, x, xp)
+        if which is None:
+            self.switch.action(t, x, xp)
+        else:
+            self.switch.action(t, x, xp, which)
         if np.array_equal(x.data, x0):
             return None
         y = np.array(y, dtype=float)

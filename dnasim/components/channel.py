@@ -76,6 +76,9 @@ from dnasim.components.physics import (
 )
 
 
+#: phase branch codes (``dnasim.media.if97_numba.ph_branch_scalar``)
+AUTO, LIQUID, DOME, VAPOUR = 0, 1, 2, 3
+
 class Channel:
     """Declarations and residual blocks of n volumes in series (see module doc)."""
 
@@ -126,6 +129,10 @@ class Channel:
         self.m, self.M, self.U, self.Q = P + "m", P + "M", P + "U", P + "Q"
         self.pv, self.hv = P + "p_v", P + "h_v"
         self._props = PropertyArrays()
+        #: phase modes per volume (set by the component: ``use_phase_modes``)
+        self.phase_modes = False
+        self.phase_delay = 0.0
+        self.phase_key = P + "phase"
 
     @property
     def frictionless(self) -> bool:
@@ -244,10 +251,18 @@ class Channel:
         ]
 
     def evaluate(self, medium, x):
-        """Property arrays (p, h, T, rho, u) of the n + 2 states S_0..S_{n+1}."""
+        """Property arrays (p, h, T, rho, u) of the n + 2 states S_0..S_{n+1}.
+
+        With phase modes (``phase_modes``) each volume is evaluated on its mode's
+        branch; the outlet node, whose state is the last volume's, on the last
+        volume's branch; the inlet node as usual."""
         p = np.concatenate(([x[f"{self.inlet}.p"]], x[self.pv], [x[f"{self.outlet}.p"]]))
         h = np.concatenate(([x[f"{self.inlet}.h"]], x[self.hv], [x[f"{self.outlet}.h"]]))
-        T, rho, u = self._props(medium, p, h)
+        mode = x.modes.get(self.phase_key) if self.phase_modes else None
+        branch = None
+        if mode is not None:
+            branch = np.concatenate(([0], mode, mode[-1:]))
+        T, rho, u = self._props(medium, p, h, branch)
         return p, h, T, rho, u
 
     def inflow_weights(self, m):
@@ -319,6 +334,12 @@ class Channel:
             P + "outlet_pressure": outlet_pressure,
         }
 
+    def use_phase_modes(self, delay: float) -> None:
+        """Evaluate each volume on its phase branch, kept as a discrete mode between
+        located crossings (module doc, "Phase modes"); delay [J/kg] >= 0."""
+        self.phase_modes = True
+        self.phase_delay = float(delay)
+
     def switches(self, medium):
         """The phase switch of the n volumes (see the module doc): one vector Switch."""
         n = self.n
@@ -328,6 +349,8 @@ class Channel:
                 f"{self.hv}[{i}] saturated liquid",
                 f"{self.hv}[{i}] saturated vapour",
             ]
+        if self.phase_modes:
+            return [self._mode_switch(medium, names)]
 
         def g(t, x, xp):
             pv = np.asarray(x[self.pv], dtype=float)
@@ -351,6 +374,63 @@ class Channel:
                 doc="crossing of the saturated-liquid / saturated-vapour line, per volume",
             )
         ]
+
+    # ------------------------------------------------------------------ phase modes
+    def _mode_switch(self, medium, names):
+        n = self.n
+        d = self.phase_delay
+
+        def g(t, x, xp):
+            mode = x.modes.get(self.phase_key)
+            out = np.ones(2 * n)
+            if mode is None:
+                return out
+            hv = np.asarray(x[self.hv], dtype=float)
+            hl, hvap = saturation_enthalpies(medium, np.asarray(x[self.pv], dtype=float))
+            sub = np.isfinite(hl)
+            liq, dome, vap = (mode == LIQUID) & sub, (mode == DOME) & sub, (mode == VAPOUR) & sub
+            lo = out[0::2]
+            hi = out[1::2]
+            lo[liq] = (hl + d - hv)[liq]  # liquid -> dome once h > h' + delay
+            lo[dome] = (hv - hl)[dome]  # dome -> liquid at h'
+            hi[dome] = (hvap - hv)[dome]  # dome -> vapour at h''
+            hi[vap] = (hv - hvap + d)[vap]  # vapour -> dome once h < h'' - delay
+            return out
+
+        def action(t, x, xp, which):
+            mode = x.modes[self.phase_key].copy()
+            for k in np.atleast_1d(which):
+                i, line = divmod(int(k), 2)
+                if line == 0:
+                    mode[i] = DOME if mode[i] == LIQUID else LIQUID
+                else:
+                    mode[i] = DOME if mode[i] == VAPOUR else VAPOUR
+            x.modes[self.phase_key] = mode
+
+        return Switch(
+            f"{self.prefix}phase",
+            g,
+            direction=-1,
+            action=action,
+            size=2 * n,
+            restart=True,
+            names=names,
+            doc="phase mode of each volume: liquid -> two-phase at h' + delay, two-phase -> "
+            "liquid at h', two-phase -> vapour at h'', vapour -> two-phase at h'' - delay",
+        )
+
+    def init_phase_modes(self, medium, x) -> bool:
+        """Set each volume's phase mode from its state (h < h': liquid, h > h'':
+        vapour, else two-phase; supercritical: none). True when the modes changed."""
+        if not self.phase_modes:
+            return False
+        hv = np.asarray(x[self.hv], dtype=float)
+        hl, hvap = saturation_enthalpies(medium, np.asarray(x[self.pv], dtype=float))
+        mode = np.where(hv < hl, LIQUID, np.where(hv > hvap, VAPOUR, DOME))
+        mode = np.where(np.isfinite(hl), mode, AUTO).astype(np.int64)
+        old = x.modes.get(self.phase_key)
+        x.modes[self.phase_key] = mode
+        return old is None or not np.array_equal(old, mode)
 
     def guess(self, x, medium, p_vol, h_vol, m_guess):
         """Fill guesses from volume states (arrays of n), uniform flow, Q = 0.

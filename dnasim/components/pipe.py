@@ -7,7 +7,7 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
-from dnasim.components.physics import M_REG_REL, is_condensable
+from dnasim.components.physics import M_REG_REL, has_phase_branches, is_condensable
 from dnasim.errors import PlantError
 
 
@@ -109,6 +109,13 @@ class Pipe(Component):
             True,
             "locate crossings of the saturation lines per volume (condensable media)",
             kind="bool",
+        ),
+        Param(
+            "phase_delay",
+            "J/kg",
+            0.0,
+            "boiling and condensation start this far past the saturation line (phase modes)",
+            min=0.0,
         ),
         Param(
             "wall_layers",
@@ -250,10 +257,24 @@ class Pipe(Component):
             ]
         return []
 
+    def _phase_modes_on(self) -> bool:
+        """Phase switches on a condensable medium; with IF97 (forced phase branches)
+        as discrete modes per volume (``dnasim.components.channel``, "Phase modes")."""
+        if not (self.params["phase_switches"] and is_condensable(self.medium)):
+            return False
+        if has_phase_branches(self.medium) and not self.channel.phase_modes:
+            self.channel.use_phase_modes(self.params["phase_delay"])
+        return True
+
     def switches(self):
-        if self.params["phase_switches"] and is_condensable(self.medium):
+        if self._phase_modes_on():
             return self.channel.switches(self.medium)
         return []
+
+    def init_discrete_state(self, t0, x, xp) -> bool:
+        if self._phase_modes_on():
+            return self.channel.init_phase_modes(self.medium, x)
+        return False
 
     def variables(self):
         P = self.params
