@@ -53,9 +53,32 @@ volume's enthalpy the opposite way at once (U cannot jump): after a +100 K inlet
 step the outlet of a one-volume pipe jumps down. It is the seed's lumped model,
 kept as an option; "outlet" (a mixed volume) is the default.
 
-Phase switches (optional, for condensable media): per volume the vector switch
-g = [h_v[i] - h_liq(p_v[i]), h_vap(p_v[i]) - h_v[i]] marks the crossing of the
-saturated-liquid and saturated-vapour lines; restart-only (no action).
+Phase modes (condensable media; the seed's switch variables, ch. 10). The homogeneous
+equation of state rho(p, h) is continuous but kinked on the saturation lines: at 10 bar
+d rho/dh|_p jumps from -2.2e-4 (liquid) to -0.075 kg/m3 per J/kg (two-phase). A Newton
+iteration whose matrix belongs to one side of the kink diverges on the other, so a
+volume that crosses the line inside a step stops the run. With IF97 water (its kernel
+evaluates a forced branch: ``dnasim.media.if97_numba.ph_branch_scalar``) each volume
+keeps its phase as a discrete mode, mode[i] in {liquid, two-phase, vapour} (none above
+the critical pressure), and is evaluated on that branch, continued smoothly past the
+line (metastable liquid or vapour; the mixture formula at x < 0 or x > 1). The vector
+switch, per volume,
+
+    liquid mode     g[2i]   = h'(p_v[i]) - h_v[i]      (-> two-phase)
+    two-phase mode  g[2i]   = h_v[i] - h'(p_v[i])      (-> liquid)
+                    g[2i+1] = h''(p_v[i]) - h_v[i]     (-> vapour)
+    vapour mode     g[2i+1] = h_v[i] - h''(p_v[i])     (-> two-phase)
+
+is located by the integrator, which changes the mode there and restarts at order 1.
+The branches meet on the line, so the state does not jump at a mode change. Modes are
+set from the state at the start (``init_phase_modes``). A hysteresis (switching
+only some J/kg past the line) was tried and dropped: at fixed M and U the state of a
+liquid-filled volume then jumps at the switch, and its pressure with it (a 1 kJ/kg delay
+gave a 31 kg/s flow spike at 10 bar).
+
+Other condensable media (CoolProp) have no forced branch: the same switch functions
+(g = [h_v - h', h'' - h_v]) then only mark the kink, located with a restart and no
+action.
 """
 
 from __future__ import annotations
@@ -75,9 +98,9 @@ from dnasim.components.physics import (
     upwind_weight,
 )
 
-
 #: phase branch codes (``dnasim.media.if97_numba.ph_branch_scalar``)
 AUTO, LIQUID, DOME, VAPOUR = 0, 1, 2, 3
+
 
 class Channel:
     """Declarations and residual blocks of n volumes in series (see module doc)."""
@@ -131,7 +154,6 @@ class Channel:
         self._props = PropertyArrays()
         #: phase modes per volume (set by the component: ``use_phase_modes``)
         self.phase_modes = False
-        self.phase_delay = 0.0
         self.phase_key = P + "phase"
 
     @property
@@ -334,11 +356,10 @@ class Channel:
             P + "outlet_pressure": outlet_pressure,
         }
 
-    def use_phase_modes(self, delay: float) -> None:
+    def use_phase_modes(self) -> None:
         """Evaluate each volume on its phase branch, kept as a discrete mode between
-        located crossings (module doc, "Phase modes"); delay [J/kg] >= 0."""
+        located crossings (module doc, "Phase modes")."""
         self.phase_modes = True
-        self.phase_delay = float(delay)
 
     def switches(self, medium):
         """The phase switch of the n volumes (see the module doc): one vector Switch."""
@@ -378,7 +399,6 @@ class Channel:
     # ------------------------------------------------------------------ phase modes
     def _mode_switch(self, medium, names):
         n = self.n
-        d = self.phase_delay
 
         def g(t, x, xp):
             mode = x.modes.get(self.phase_key)
@@ -391,10 +411,10 @@ class Channel:
             liq, dome, vap = (mode == LIQUID) & sub, (mode == DOME) & sub, (mode == VAPOUR) & sub
             lo = out[0::2]
             hi = out[1::2]
-            lo[liq] = (hl + d - hv)[liq]  # liquid -> dome once h > h' + delay
+            lo[liq] = (hl - hv)[liq]  # liquid -> dome at h'
             lo[dome] = (hv - hl)[dome]  # dome -> liquid at h'
             hi[dome] = (hvap - hv)[dome]  # dome -> vapour at h''
-            hi[vap] = (hv - hvap + d)[vap]  # vapour -> dome once h < h'' - delay
+            hi[vap] = (hv - hvap)[vap]  # vapour -> dome at h
             return out
 
         def action(t, x, xp, which):
@@ -415,8 +435,8 @@ class Channel:
             size=2 * n,
             restart=True,
             names=names,
-            doc="phase mode of each volume: liquid -> two-phase at h' + delay, two-phase -> "
-            "liquid at h', two-phase -> vapour at h'', vapour -> two-phase at h'' - delay",
+            doc="phase mode of each volume: liquid <-> two-phase at h', two-phase <-> vapour "
+            "at h''",
         )
 
     def init_phase_modes(self, medium, x) -> bool:

@@ -107,15 +107,9 @@ class Pipe(Component):
             "phase_switches",
             "1",
             True,
-            "locate crossings of the saturation lines per volume (condensable media)",
+            "locate crossings of the saturation lines per volume (condensable media; with IF97 "
+            "each volume's phase is a discrete mode, see dnasim.components.channel)",
             kind="bool",
-        ),
-        Param(
-            "phase_delay",
-            "J/kg",
-            0.0,
-            "boiling and condensation start this far past the saturation line (phase modes)",
-            min=0.0,
         ),
         Param(
             "wall_layers",
@@ -263,7 +257,7 @@ class Pipe(Component):
         if not (self.params["phase_switches"] and is_condensable(self.medium)):
             return False
         if has_phase_branches(self.medium) and not self.channel.phase_modes:
-            self.channel.use_phase_modes(self.params["phase_delay"])
+            self.channel.use_phase_modes()
         return True
 
     def switches(self):

@@ -739,7 +739,9 @@ def ph_arrays(p, h, branch=None) -> K.PhResult:
     if branch is None:
         _ph_loop(pf, hf, *out)
     else:
-        bf = np.ascontiguousarray(np.broadcast_to(np.asarray(branch, dtype=np.int64), shape).ravel())
+        bf = np.ascontiguousarray(
+            np.broadcast_to(np.asarray(branch, dtype=np.int64), shape).ravel()
+        )
         _ph_branch_loop(pf, hf, bf, *out)
     r.v = 1.0 / r.rho
     r.ok = r.status == 0

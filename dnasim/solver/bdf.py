@@ -24,7 +24,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse
 
 from dnasim.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
@@ -49,10 +48,6 @@ ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
 # restart step from the solution (True) or IDA's rule (False, the default), see restart_step
 RESTART_FROM_SOLUTION = False
 RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_step
-# Newton's round-off floor (see _noise_floor): the residual's terms are taken to carry
-# a relative rounding error of ROUNDOFF_ULPS ulps (the property kernels solve T(p, h) to
-# ~1e-13 relative, ~500 ulps), and a correction at the floor counts as converged
-ROUNDOFF_ULPS = 1000.0
 
 
 @dataclass
@@ -180,8 +175,6 @@ class NordsieckBDF:
         self.fixed_step = fixed_step
         self.z = np.zeros((nd.MAX_ORDER + 2, self.n))
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
-        self.noise_floor = None  # _noise_floor of the current matrix
-        self._signs = None
         self.jacobian_current = False
         self.failure = StepFailure()
         # predicted_crossing(t_a, t_b) -> the earliest crossing time of a restart switch
@@ -476,19 +469,23 @@ class NordsieckBDF:
 
     def _full_newton(self, t, y, yp, f, cj, h, weights):
         """Newton with a fresh matrix every iteration (see ``_correct``)."""
+        previous = math.inf
         for _ in range(FULL_NEWTON_ITERS):
             self._new_matrix(t, y, yp, f, cj, h, weights)
             self.stats.full_newton_iters += 1
             converged, y, yp = self._newton(t, y, yp, f, cj, weights, fresh=True, max_iters=1)
             if converged:
                 return True, y, yp
-            if not self._slow_but_converging:
-                return False, y, yp
+            if not self._slow_but_converging or not self._last_dnorm < previous:
+                return False, y, yp  # not finite, or diverging
+            previous = self._last_dnorm
             f = self.residual(t, y, yp)
             if not all_finite(f):
                 self._note_nonfinite(t, f)
                 return False, y, yp
-        self.failure = StepFailure(f"full Newton did not converge in {FULL_NEWTON_ITERS} iterations")
+        self.failure = StepFailure(
+            f"full Newton did not converge in {FULL_NEWTON_ITERS} iterations"
+        )
         return False, y, yp
 
     def _new_matrix(self, t, y, yp, f, cj, h, weights) -> None:
@@ -505,36 +502,6 @@ class NordsieckBDF:
             raise DAEError(f"At t = {t:.10g}: {exc}") from None
         self.jacobian_current = True
         self.newton_ss = 20.0
-        self.noise_floor = self._noise_floor(y, yp)
-
-    def _noise_floor(self, y, yp):
-        """How far [units of y] the round-off of the residual moves each unknown.
-
-        A Newton iteration cannot converge below the error with which its residual is
-        computed. Each row's rounding is taken as ROUNDOFF_ULPS ulps of the magnitude
-        of its terms, e_i = ROUNDOFF_ULPS eps (|J| |y|)_i (J = dF/dy + cj dF/dy': a
-        differential row's cj |dF/dy'| |y| is its state's own rounding), and carried to
-        the unknowns through the iteration matrix, d = J^-1 (e * s) with fixed signs
-        s = +-1 (a typical, not a worst-case, combination). Almost always d is far
-        below the tolerance; it matters where the plant makes an unknown
-        hypersensitive: the flow between two liquid-filled volumes of a low-friction
-        tube is fixed by pressures read off the volumes' masses at 1e-10 relative (a
-        liquid's M = V rho(p, h) changes by 5e-10 per bar), so its round-off reaches
-        1e-5 kg/s, ten times a tolerance of 1e-6 kg/s, and a test on the plain
-        weights never passes (tests/field/boiling_10bar.toml stopped at 22.8 s). The
-        Newton test then counts only the part of each correction above its floor,
-        max(|Delta_i| - d_i, 0): a correction within the round-off carries no
-        information (and its ratio between iterations is no convergence rate).
-        """
-        m = self.matrix.matrix
-        mag = (abs(m) @ np.abs(y)) if scipy.sparse.issparse(m) else np.abs(m) @ np.abs(y)
-        e = ROUNDOFF_ULPS * EPS * np.asarray(mag, dtype=float).ravel()
-        if self._signs is None or self._signs.size != e.size:
-            self._signs = np.where(np.arange(e.size) % 3 == 1, -1.0, 1.0)
-        d = np.abs(self.matrix.solve(e * self._signs))
-        if not np.all(np.isfinite(d)):
-            return None
-        return d
 
     def _newton(self, t, y, yp, f, cj, weights, fresh=False, max_iters=NEWTON_MAX_ITERS):
         """Iterate y <- y - J^{-1} F with the DASSL/IDA rate test; returns (converged, y, yp)."""
@@ -545,7 +512,6 @@ class NordsieckBDF:
         c = abs(1.0 - ratio) / (1.0 + ratio)
         self.newton_ss = max(self.newton_ss, c / (1.0 - c))
         first_norm = None
-        floor = self.noise_floor
         self._slow_but_converging = False
         for m in range(max_iters):
             self.stats.newton_iters += 1
@@ -554,11 +520,9 @@ class NordsieckBDF:
                 d *= scale
             y = y + d
             yp = yp + cj * d
-            dw = d * weights if floor is None else np.maximum(np.abs(d) - floor, 0.0) * weights
+            dw = d * weights
             dnorm = math.sqrt(dw.dot(dw) / dw.size)  # self.norm(d, weights), inlined
-            self._last_dw = dw
-            if getattr(self, "_trace", None) is not None:
-                self._trace.append((m, d.copy(), dnorm))
+            self._last_dnorm = dnorm
             if not math.isfinite(dnorm):
                 self.failure = StepFailure("the Newton update is not finite")
                 return False, y, yp
@@ -589,8 +553,8 @@ class NordsieckBDF:
                     return False, y, yp
         self.failure = StepFailure(f"Newton did not converge in {max_iters} iterations")
         # converging, only not fast enough: full Newton may finish it (``_correct``)
-        self._slow_but_converging = fresh and first_norm is not None and (
-            m == 0 or dnorm < first_norm
+        self._slow_but_converging = (
+            fresh and first_norm is not None and (m == 0 or dnorm < first_norm)
         )
         return False, y, yp
 
