@@ -140,7 +140,7 @@ class PlantEvent:
         b = self.block
         x, xp = b.local(y), b.local(yp)
         x0 = x.data.copy()
-        if which is None:
+        if which is None or self.size == 1:
             self.switch.action(t, x, xp)
         else:
             self.switch.action(t, x, xp, which)
