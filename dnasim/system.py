@@ -67,6 +67,8 @@ will hold at the end of the run.
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -119,6 +121,12 @@ class PlantEvent:
             names = names or [f"{switch.name}[{i}]" for i in range(self.size)]
             self.names = [f"{block.comp.name}.{nm}" for nm in names]
         self.variables = np.asarray(block.gidx, dtype=np.intp)
+        # a vector switch's action(t, x, xp, which) is told the located entries; an
+        # action(t, x, xp) acts on all of them itself
+        action = getattr(switch, "action", None)
+        self._action_takes_which = (
+            self.size > 1 and action is not None and len(inspect.signature(action).parameters) >= 4
+        )
 
     def __call__(self, t, y, yp):
         b = self.block
@@ -140,7 +148,10 @@ class PlantEvent:
         b = self.block
         x, xp = b.local(y), b.local(yp)
         x0 = x.data.copy()
-        self.switch.action(t, x, xp)
+        if which is None or not self._action_takes_which:
+            self.switch.action(t, x, xp)
+        else:
+            self.switch.action(t, x, xp, which)
         if np.array_equal(x.data, x0):
             return None
         y = np.array(y, dtype=float)

@@ -53,9 +53,32 @@ volume's enthalpy the opposite way at once (U cannot jump): after a +100 K inlet
 step the outlet of a one-volume pipe jumps down. It is the seed's lumped model,
 kept as an option; "outlet" (a mixed volume) is the default.
 
-Phase switches (optional, for condensable media): per volume the vector switch
-g = [h_v[i] - h_liq(p_v[i]), h_vap(p_v[i]) - h_v[i]] marks the crossing of the
-saturated-liquid and saturated-vapour lines; restart-only (no action).
+Phase modes (condensable media; the seed's switch variables, ch. 10). The homogeneous
+equation of state rho(p, h) is continuous but kinked on the saturation lines: at 10 bar
+d rho/dh|_p jumps from -2.2e-4 (liquid) to -0.075 kg/m3 per J/kg (two-phase). A Newton
+iteration whose matrix belongs to one side of the kink diverges on the other, so a
+volume that crosses the line inside a step stops the run. With IF97 water (its kernel
+evaluates a forced branch: ``dnasim.media.if97_numba.ph_branch_scalar``) each volume
+keeps its phase as a discrete mode, mode[i] in {liquid, two-phase, vapour} (none above
+the critical pressure), and is evaluated on that branch, continued smoothly past the
+line (metastable liquid or vapour; the mixture formula at x < 0 or x > 1). The vector
+switch, per volume,
+
+    liquid mode     g[2i]   = h'(p_v[i]) - h_v[i]      (-> two-phase)
+    two-phase mode  g[2i]   = h_v[i] - h'(p_v[i])      (-> liquid)
+                    g[2i+1] = h''(p_v[i]) - h_v[i]     (-> vapour)
+    vapour mode     g[2i+1] = h_v[i] - h''(p_v[i])     (-> two-phase)
+
+is located by the integrator, which changes the mode there and restarts at order 1.
+The branches meet on the line, so the state does not jump at a mode change. Modes are
+set from the state at the start (``init_phase_modes``). A hysteresis (switching
+only some J/kg past the line) was tried and dropped: at fixed M and U the state of a
+liquid-filled volume then jumps at the switch, and its pressure with it (a 1 kJ/kg delay
+gave a 31 kg/s flow spike at 10 bar).
+
+Other condensable media (CoolProp) have no forced branch: the same switch functions
+(g = [h_v - h', h'' - h_v]) then only mark the kink, located with a restart and no
+action.
 """
 
 from __future__ import annotations
@@ -74,6 +97,9 @@ from dnasim.components.physics import (
     upwind_mean_weighted,
     upwind_weight,
 )
+
+#: phase branch codes (``dnasim.media.if97_numba.ph_branch_scalar``)
+AUTO, LIQUID, DOME, VAPOUR = 0, 1, 2, 3
 
 
 class Channel:
@@ -126,6 +152,9 @@ class Channel:
         self.m, self.M, self.U, self.Q = P + "m", P + "M", P + "U", P + "Q"
         self.pv, self.hv = P + "p_v", P + "h_v"
         self._props = PropertyArrays()
+        #: phase modes per volume (set by the component: ``use_phase_modes``)
+        self.phase_modes = False
+        self.phase_key = P + "phase"
 
     @property
     def frictionless(self) -> bool:
@@ -244,10 +273,18 @@ class Channel:
         ]
 
     def evaluate(self, medium, x):
-        """Property arrays (p, h, T, rho, u) of the n + 2 states S_0..S_{n+1}."""
+        """Property arrays (p, h, T, rho, u) of the n + 2 states S_0..S_{n+1}.
+
+        With phase modes (``phase_modes``) each volume is evaluated on its mode's
+        branch; the outlet node, whose state is the last volume's, on the last
+        volume's branch; the inlet node as usual."""
         p = np.concatenate(([x[f"{self.inlet}.p"]], x[self.pv], [x[f"{self.outlet}.p"]]))
         h = np.concatenate(([x[f"{self.inlet}.h"]], x[self.hv], [x[f"{self.outlet}.h"]]))
-        T, rho, u = self._props(medium, p, h)
+        mode = x.modes.get(self.phase_key) if self.phase_modes else None
+        branch = None
+        if mode is not None:
+            branch = np.concatenate(([0], mode, mode[-1:]))
+        T, rho, u = self._props(medium, p, h, branch)
         return p, h, T, rho, u
 
     def inflow_weights(self, m):
@@ -319,6 +356,11 @@ class Channel:
             P + "outlet_pressure": outlet_pressure,
         }
 
+    def use_phase_modes(self) -> None:
+        """Evaluate each volume on its phase branch, kept as a discrete mode between
+        located crossings (module doc, "Phase modes")."""
+        self.phase_modes = True
+
     def switches(self, medium):
         """The phase switch of the n volumes (see the module doc): one vector Switch."""
         n = self.n
@@ -328,6 +370,8 @@ class Channel:
                 f"{self.hv}[{i}] saturated liquid",
                 f"{self.hv}[{i}] saturated vapour",
             ]
+        if self.phase_modes:
+            return [self._mode_switch(medium, names)]
 
         def g(t, x, xp):
             pv = np.asarray(x[self.pv], dtype=float)
@@ -351,6 +395,62 @@ class Channel:
                 doc="crossing of the saturated-liquid / saturated-vapour line, per volume",
             )
         ]
+
+    # ------------------------------------------------------------------ phase modes
+    def _mode_switch(self, medium, names):
+        n = self.n
+
+        def g(t, x, xp):
+            mode = x.modes.get(self.phase_key)
+            out = np.ones(2 * n)
+            if mode is None:
+                return out
+            hv = np.asarray(x[self.hv], dtype=float)
+            hl, hvap = saturation_enthalpies(medium, np.asarray(x[self.pv], dtype=float))
+            sub = np.isfinite(hl)
+            liq, dome, vap = (mode == LIQUID) & sub, (mode == DOME) & sub, (mode == VAPOUR) & sub
+            lo = out[0::2]
+            hi = out[1::2]
+            lo[liq] = (hl - hv)[liq]  # liquid -> dome at h'
+            lo[dome] = (hv - hl)[dome]  # dome -> liquid at h'
+            hi[dome] = (hvap - hv)[dome]  # dome -> vapour at h''
+            hi[vap] = (hv - hvap)[vap]  # vapour -> dome at h
+            return out
+
+        def action(t, x, xp, which):
+            mode = x.modes[self.phase_key].copy()
+            for k in np.atleast_1d(which):
+                i, line = divmod(int(k), 2)
+                if line == 0:
+                    mode[i] = DOME if mode[i] == LIQUID else LIQUID
+                else:
+                    mode[i] = DOME if mode[i] == VAPOUR else VAPOUR
+            x.modes[self.phase_key] = mode
+
+        return Switch(
+            f"{self.prefix}phase",
+            g,
+            direction=-1,
+            action=action,
+            size=2 * n,
+            restart=True,
+            names=names,
+            doc="phase mode of each volume: liquid <-> two-phase at h', two-phase <-> vapour "
+            "at h''",
+        )
+
+    def init_phase_modes(self, medium, x) -> bool:
+        """Set each volume's phase mode from its state (h < h': liquid, h > h'':
+        vapour, else two-phase; supercritical: none). True when the modes changed."""
+        if not self.phase_modes:
+            return False
+        hv = np.asarray(x[self.hv], dtype=float)
+        hl, hvap = saturation_enthalpies(medium, np.asarray(x[self.pv], dtype=float))
+        mode = np.where(hv < hl, LIQUID, np.where(hv > hvap, VAPOUR, DOME))
+        mode = np.where(np.isfinite(hl), mode, AUTO).astype(np.int64)
+        old = x.modes.get(self.phase_key)
+        x.modes[self.phase_key] = mode
+        return old is None or not np.array_equal(old, mode)
 
     def guess(self, x, medium, p_vol, h_vol, m_guess):
         """Fill guesses from volume states (arrays of n), uniform flow, Q = 0.

@@ -7,7 +7,7 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
-from dnasim.components.physics import M_REG_REL, is_condensable
+from dnasim.components.physics import M_REG_REL, has_phase_branches, is_condensable
 from dnasim.errors import PlantError
 
 
@@ -69,7 +69,8 @@ class HeatExchanger(Component):
             "phase_switches",
             "1",
             False,
-            "locate crossings of the saturation lines per volume (condensable media)",
+            "locate crossings of the saturation lines per volume (condensable media; with IF97 "
+            "each volume's phase is a discrete mode, see dnasim.components.channel)",
             kind="bool",
         ),
         Param("C_wall", "J/K", doc="wall heat capacity", min=0.0),
@@ -222,15 +223,29 @@ class HeatExchanger(Component):
         """The medium object of one stream ("hot" or "cold")."""
         return self.port_media.get(f"{side}_in")
 
-    def switches(self):
+    def _phase_sides(self):
+        """(channel, medium) of the sides with phase switches; with IF97 (forced phase
+        branches) each volume's phase is a discrete mode (``dnasim.components.channel``)."""
         if not self.params["phase_switches"]:
             return []
         out = []
         for side in ("hot", "cold"):
             medium = self.side_medium(side)
             if medium is not None and is_condensable(medium):
-                out += self.channels[side].switches(medium)
+                ch = self.channels[side]
+                if has_phase_branches(medium) and not ch.phase_modes:
+                    ch.use_phase_modes()
+                out.append((ch, medium))
         return out
+
+    def switches(self):
+        return [sw for ch, medium in self._phase_sides() for sw in ch.switches(medium)]
+
+    def init_discrete_state(self, t0, x, xp) -> bool:
+        changed = False
+        for ch, medium in self._phase_sides():
+            changed = ch.init_phase_modes(medium, x) or changed
+        return changed
 
     def variables(self):
         out = []

@@ -13,8 +13,12 @@ import numpy as np
 G = 9.80665  # standard gravity [m/s2]
 
 
-def properties(medium, p, h):
+def properties(medium, p, h, branch=None):
     """T [K], rho [kg/m3], u [J/kg] at each (p [Pa], h [J/kg]) as arrays.
+
+    branch: None, or per point the phase branch to evaluate (``has_phase_branches``;
+    codes of ``dnasim.media.if97_numba.ph_branch_scalar``: 0 auto, 1 liquid, 2 dome,
+    3 vapour); points with branch 0 are evaluated as usual.
 
     One ``medium.states(p, h)`` call for all points (IF97 water, ideal gases and gas
     mixtures evaluate it as array code; CoolProp media loop inside it); a single point
@@ -24,11 +28,20 @@ def properties(medium, p, h):
     """
     p = np.atleast_1d(np.asarray(p, dtype=float))
     h = np.atleast_1d(np.asarray(h, dtype=float))
+    if branch is not None and np.any(branch):
+        r = medium.states(p, h, branch=branch)
+        return r.T, r.rho, r.u
     if p.size == 1:
         s = medium.state(float(p[0]), float(h[0]))
         return np.array([s.T]), np.array([s.rho]), np.array([s.u])
     r = medium.states(p, h)
     return r.T, r.rho, r.u
+
+
+def has_phase_branches(medium) -> bool:
+    """True when ``medium.states`` takes ``branch=`` (a forced phase branch per point:
+    IF97 water on its compiled kernel)."""
+    return bool(getattr(medium, "phase_branches", False))
 
 
 class PropertyArrays:
@@ -43,25 +56,30 @@ class PropertyArrays:
     def __init__(self):
         self.p = None
         self.h = None
+        self.branch = None
         self.out = None
         self.medium = None
 
-    def __call__(self, medium, p, h):
+    def __call__(self, medium, p, h, branch=None):
+        """As ``properties``; ``branch`` (int array or None) is part of each point's key."""
         p = np.asarray(p, dtype=float)
         h = np.asarray(h, dtype=float)
+        b = np.zeros(p.shape, dtype=np.int64) if branch is None else np.asarray(branch)
         if self.p is None or self.p.shape != p.shape or self.medium is not medium:
             self.medium = medium
-            T, rho, u = properties(medium, p, h)
+            T, rho, u = properties(medium, p, h, b)
         else:
-            changed = np.flatnonzero((p != self.p) | (h != self.h))
+            changed = np.flatnonzero((p != self.p) | (h != self.h) | (b != self.branch))
             if changed.size == 0:
                 return tuple(a.copy() for a in self.out)
             if changed.size == p.size:
-                T, rho, u = properties(medium, p, h)
+                T, rho, u = properties(medium, p, h, b)
             else:
                 T, rho, u = (a.copy() for a in self.out)
-                T[changed], rho[changed], u[changed] = properties(medium, p[changed], h[changed])
-        self.p, self.h, self.out = p.copy(), h.copy(), (T, rho, u)
+                T[changed], rho[changed], u[changed] = properties(
+                    medium, p[changed], h[changed], b[changed]
+                )
+        self.p, self.h, self.branch, self.out = p.copy(), h.copy(), b.copy(), (T, rho, u)
         return T.copy(), rho.copy(), u.copy()
 
 

@@ -7,7 +7,7 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
-from dnasim.components.physics import M_REG_REL, is_condensable
+from dnasim.components.physics import M_REG_REL, has_phase_branches, is_condensable
 from dnasim.errors import PlantError
 
 
@@ -107,7 +107,8 @@ class Pipe(Component):
             "phase_switches",
             "1",
             True,
-            "locate crossings of the saturation lines per volume (condensable media)",
+            "locate crossings of the saturation lines per volume (condensable media; with IF97 "
+            "each volume's phase is a discrete mode, see dnasim.components.channel)",
             kind="bool",
         ),
         Param(
@@ -250,10 +251,24 @@ class Pipe(Component):
             ]
         return []
 
+    def _phase_modes_on(self) -> bool:
+        """Phase switches on a condensable medium; with IF97 (forced phase branches)
+        as discrete modes per volume (``dnasim.components.channel``, "Phase modes")."""
+        if not (self.params["phase_switches"] and is_condensable(self.medium)):
+            return False
+        if has_phase_branches(self.medium) and not self.channel.phase_modes:
+            self.channel.use_phase_modes()
+        return True
+
     def switches(self):
-        if self.params["phase_switches"] and is_condensable(self.medium):
+        if self._phase_modes_on():
             return self.channel.switches(self.medium)
         return []
+
+    def init_discrete_state(self, t0, x, xp) -> bool:
+        if self._phase_modes_on():
+            return self.channel.init_phase_modes(self.medium, x)
+        return False
 
     def variables(self):
         P = self.params

@@ -90,9 +90,21 @@ class IF97Water(Medium):
             float(r.drho_dh_p),
         )
 
-    def states(self, p, h, *, check: bool = True) -> FluidStates:
-        """Vectorised :meth:`state` (see :meth:`Medium.states`): one kernel call."""
-        r = NB.ph_arrays(p, h) if self.kernel == "numba" else K.ph(p, h)
+    @property
+    def phase_branches(self) -> bool:
+        """True when ``states`` takes ``branch=`` (the compiled kernel)."""
+        return self.kernel == "numba"
+
+    def states(self, p, h, *, check: bool = True, branch=None) -> FluidStates:
+        """Vectorised :meth:`state` (see :meth:`Medium.states`): one kernel call.
+
+        branch: None, or per point a forced phase branch (0 auto, 1 liquid, 2 dome,
+        3 vapour: :func:`dnasim.media.if97_numba.ph_branch_scalar`), compiled kernel
+        only."""
+        if branch is not None and self.kernel == "numba":
+            r = NB.ph_arrays(p, h, branch)
+        else:
+            r = NB.ph_arrays(p, h) if self.kernel == "numba" else K.ph(p, h)
         if check:
             r.raise_first_bad(self.label)
         self.n_evaluations += r.p.size

@@ -586,31 +586,81 @@ def ph_scalar(p, h):
             kind = -1
             lo = Ts
         else:
-            dh = hV - hL
-            vL, vV = recL[0], recV[0]
-            dv = vV - vL
-            x = (h - hL) / dh
-            v = vL + x * dv
-            rho = 1.0 / v
-            vLp = recL[4] + recL[3] * dTs
-            vVp = recV[4] + recV[3] * dTs
-            hLp = recL[6] + recL[5] * dTs
-            hVp = recV[6] + recV[5] * dTs
-            dp_h = -rho * rho * (vLp + x * (vVp - vLp) - dv * (hLp + x * (hVp - hLp)) / dh)
-            return (
-                Ts,
-                rho,
-                h - p / rho,
-                recL[2] + x * (recV[2] - recL[2]),
-                math.inf,
-                x,
-                dp_h,
-                -rho * rho * dv / dh,
-                4,
-                0,
-            )
+            return _dome(p, h, Ts, dTs, recL, recV)
     T, rec, reg, st = _solve_single(p, h, kind, lo, hi)
     return _single_out(p, h, T, rec, reg, st)
+
+
+@_njit
+def _dome(p, h, Ts, dTs, recL, recV):
+    """The homogeneous two-phase state at (p, h) from the saturated records (any x:
+    outside 0 <= x <= 1 it is the dome's formula continued, used by a forced branch)."""
+    dh = recV[1] - recL[1]
+    vL, vV = recL[0], recV[0]
+    dv = vV - vL
+    x = (h - recL[1]) / dh
+    v = vL + x * dv
+    rho = 1.0 / v
+    vLp = recL[4] + recL[3] * dTs
+    vVp = recV[4] + recV[3] * dTs
+    hLp = recL[6] + recL[5] * dTs
+    hVp = recV[6] + recV[5] * dTs
+    dp_h = -rho * rho * (vLp + x * (vVp - vLp) - dv * (hLp + x * (hVp - hLp)) / dh)
+    return (
+        Ts,
+        rho,
+        h - p / rho,
+        recL[2] + x * (recV[2] - recL[2]),
+        math.inf,
+        x,
+        dp_h,
+        -rho * rho * dv / dh,
+        4,
+        0,
+    )
+
+
+#: how far [K] beyond T_sat(p) a forced single-phase branch may be continued
+#: (metastable liquid or vapour); further out the state is computed as usual
+BRANCH_MARGIN_T = 30.0
+
+#: branch codes of :func:`ph_branch_scalar`
+AUTO, LIQUID, DOME, VAPOUR = 0, 1, 2, 3
+
+
+@_njit
+def ph_branch_scalar(p, h, branch):
+    """As :func:`ph_scalar`, with the phase branch forced (p < p_c only).
+
+    branch AUTO: :func:`ph_scalar`. LIQUID: the liquid-side equations (region 1, or
+    region 3 on its liquid root) continued past h'(p) into metastable liquid, up to
+    T_sat + BRANCH_MARGIN_T. VAPOUR: the vapour side continued below h''(p). DOME:
+    the homogeneous mixture formula continued to x < 0 and x > 1. Each branch is
+    smooth in (p, h) and equals the true state on its own side of the saturation
+    line, so a model that keeps a volume's branch between located crossings (a
+    discrete mode, ``dnasim.components.channel``) sees no kink within a step. Where
+    the forced branch has no solution the true state is returned.
+    """
+    if branch == AUTO or not (P_MIN <= p < P_C) or not (math.isfinite(p) and math.isfinite(h)):
+        return ph_scalar(p, h)
+    Ts = _tsat(p)
+    if branch == LIQUID:
+        T, rec, reg, st = _solve_single(p, h, 1, T_MIN, Ts + BRANCH_MARGIN_T)
+        if st != 0:
+            return ph_scalar(p, h)
+        return _single_out(p, h, T, rec, reg, st)
+    if branch == VAPOUR:
+        hi = T_MAX_R5 if p <= P_R5_MAX else T_25
+        T, rec, reg, st = _solve_single(p, h, -1, max(Ts - BRANCH_MARGIN_T, T_MIN), hi)
+        if st != 0:
+            return ph_scalar(p, h)
+        return _single_out(p, h, T, rec, reg, st)
+    _, dps = _psat_slope(Ts)
+    recL, _, _, okL = _eval(p, Ts, True, math.nan)
+    recV, _, _, okV = _eval(p, Ts, False, math.nan)
+    if not (okL and okV and recV[1] > recL[1]):
+        return ph_scalar(p, h)
+    return _dome(p, h, Ts, 1.0 / dps, recL, recV)
 
 
 @_njit
@@ -652,8 +702,27 @@ def _ph_loop(p, h, T, rho, u, s, cp, x, dp, dh, region, status):
         status[i] = r[9]
 
 
-def ph_arrays(p, h) -> K.PhResult:
-    """As :func:`dnasim.media.if97_kernel.ph`, compiled: a :class:`PhResult` of arrays."""
+@_njit
+def _ph_branch_loop(p, h, branch, T, rho, u, s, cp, x, dp, dh, region, status):
+    for i in range(p.size):
+        r = ph_branch_scalar(p[i], h[i], branch[i])
+        T[i] = r[0]
+        rho[i] = r[1]
+        u[i] = r[2]
+        s[i] = r[3]
+        cp[i] = r[4]
+        x[i] = r[5]
+        dp[i] = r[6]
+        dh[i] = r[7]
+        region[i] = r[8]
+        status[i] = r[9]
+
+
+def ph_arrays(p, h, branch=None) -> K.PhResult:
+    """As :func:`dnasim.media.if97_kernel.ph`, compiled: a :class:`PhResult` of arrays.
+
+    branch: None, or an int array of the points' branch codes (AUTO, LIQUID, DOME,
+    VAPOUR; see :func:`ph_branch_scalar`)."""
     p, h = np.broadcast_arrays(np.asarray(p, dtype=float), np.asarray(h, dtype=float))
     shape = p.shape
     pf = np.ascontiguousarray(p.ravel())
@@ -666,7 +735,14 @@ def ph_arrays(p, h) -> K.PhResult:
         setattr(r, f, np.empty(n))
     r.region = np.empty(n, dtype=np.int8)
     r.status = np.empty(n, dtype=np.int8)
-    _ph_loop(pf, hf, r.T, r.rho, r.u, r.s, r.cp, r.x, r.drho_dp_h, r.drho_dh_p, r.region, r.status)
+    out = (r.T, r.rho, r.u, r.s, r.cp, r.x, r.drho_dp_h, r.drho_dh_p, r.region, r.status)
+    if branch is None:
+        _ph_loop(pf, hf, *out)
+    else:
+        bf = np.ascontiguousarray(
+            np.broadcast_to(np.asarray(branch, dtype=np.int64), shape).ravel()
+        )
+        _ph_branch_loop(pf, hf, bf, *out)
     r.v = 1.0 / r.rho
     r.ok = r.status == 0
     if shape != (n,):
