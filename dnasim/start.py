@@ -27,7 +27,7 @@ def initial_values(system, t0: float = 0.0, start: str = "steady"):
     if start not in ("steady", "given"):
         raise PlantError(f"start must be 'steady' or 'given', got {start!r}")
     system.reset_modes()
-    y = initial_guess(system, t0)
+    y = initial_guess(system, t0, interpolate=start == "steady")
     yp = np.zeros(system.n)
     unknown = ~system.accumulator if start == "steady" else system.algebraic.copy()
     mode_changes: list[str] = []  # components that left their mode at a steady state found
