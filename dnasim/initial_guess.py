@@ -5,9 +5,9 @@
    supplies its own enthalpy (``FluidPort.h_source``) wins for h.
 2. Missing node guesses are propagated along components (within each stream of
    a two-stream component, ``medium_groups``): p copied from a neighbour, h inlet
-   to outlet (the design direction); for a steady start (``interpolate``) the
-   missing pressures are first interpolated between the guessed ones (a harmonic
-   mean over the node graph, ``_interpolated_pressures``). What is still missing
+   to outlet (the design direction); with ``interpolate`` (the steady start's
+   second try) the missing pressures are first interpolated between the guessed
+   ones (a harmonic mean over the node graph, ``_interpolated_pressures``). What is still missing
    defaults to p = 1e5 Pa and h = h(1e5 Pa, 293.15 K) of the node's fluid.
 3. Components fill their own variables (``Component.initial_guess``) in flow
    order (sources first), so a component sees its upstream neighbours' guesses.
@@ -106,11 +106,11 @@ def _interpolated_pressures(system, p_known: dict) -> dict:
 
 def initial_guess(system, t0: float, interpolate: bool = False) -> np.ndarray:
     """The starting point y [SI] at t0. ``interpolate``: unguessed node pressures
-    between the guessed ones (``_interpolated_pressures``; the steady start),
-    otherwise copied from a neighbour along the streams. Only for the steady
-    start: in a given start the node guesses set the components' initial states
-    (a volume's mass M = V rho(p, h)), so they are part of the plant's initial
-    condition and stay as they were."""
+    between the guessed ones (``_interpolated_pressures``; the steady start's
+    second try, ``dnasim.start``), otherwise copied from a neighbour along the
+    streams. Never for a given start: there the node guesses set the components'
+    initial states (a volume's mass M = V rho(p, h)), so they are part of the
+    plant's initial condition."""
     y = np.zeros(system.n)
     p_guess, h_guess = {}, {}
     p_rank, h_rank = {}, {}
