@@ -484,6 +484,7 @@ class NordsieckBDF:
         c = abs(1.0 - ratio) / (1.0 + ratio)
         self.newton_ss = max(self.newton_ss, c / (1.0 - c))
         first_norm = None
+        y_start, yp_start = y, yp
         start = 0  # the first iteration with the current matrix
         max_iters = NEWTON_MAX_ITERS
         m = 0
@@ -526,7 +527,12 @@ class NordsieckBDF:
                 if not all_finite(f):
                     self._note_nonfinite(t, f)
                     return False, y, yp
-                if fresh and rate > NEWTON_RATE_REFRESH and max_iters == NEWTON_MAX_ITERS:
+                if (
+                    fresh
+                    and rate > NEWTON_RATE_REFRESH
+                    and max_iters == NEWTON_MAX_ITERS
+                    and self._same_side(t, y_start, yp_start, y, yp)
+                ):
                     # linear convergence with this corrector's own matrix: rebuild it here
                     self._new_matrix(t, y, yp, f, cj, self.h, weights)
                     scale = 1.0
@@ -535,6 +541,14 @@ class NordsieckBDF:
             m += 1
         self.failure = StepFailure(f"Newton did not converge in {max_iters} iterations")
         return False, y, yp
+
+    def _same_side(self, t, y0, yp0, y, yp) -> bool:
+        """Whether (y, yp) lies on the same side of every restart switch (a kink of the
+        residual: a phase line) as (y0, yp0); True without such switches."""
+        side = self.matrix.side
+        if side is None:
+            return True
+        return bool(np.array_equal(np.sign(side(t, y0, yp0)), np.sign(side(t, y, yp))))
 
     def _note_nonfinite(self, t, f) -> None:
         bad = np.flatnonzero(~np.isfinite(f)).tolist()
