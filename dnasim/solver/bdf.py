@@ -467,7 +467,10 @@ class NordsieckBDF:
         slower than NEWTON_RATE_REFRESH, the matrix is rebuilt once at the iterate and
         the iteration goes on with NEWTON_MAX_ITERS + 1 more iterations (measured on
         rankine: 2 to 5 after the rebuild; with 4 one step failed early and the run
-        fell back into the cycle of failures below). The case: an
+        fell back into the cycle of failures below). Not when the iterate has crossed
+        a restart switch (a phase line, a kink of the residual) from the prediction:
+        there the rebuilt matrix let tests/field/boiling_10bar.toml creep on at
+        h ~ 1e-10 s for minutes instead of failing in seconds, as before. The case: an
         algebraic flow whose predictor is far off while the states are well
         predicted. The friction law p_a - p_b = c m |m| makes the Newton of the flow
         contract at the rate 1 - m*/m_pred with the matrix of the prediction m_pred:
