@@ -35,9 +35,6 @@ EPS = float(np.finfo(float).eps)
 NEWTON_MAX_ITERS = 4  # IDA's maxcor
 NEWTON_RATE_MAX = 0.9  # IDA's RATEMAX: give up when the contraction is slower
 NEWTON_TOL = 0.03  # Newton converged at 0.03 of the error test (IDA: 0.33), see _choose_next
-#: a corrector whose fresh matrix contracts slower than this rebuilds it once at the
-#: iterate (see ``_newton``)
-NEWTON_RATE_REFRESH = 0.2
 CJ_RATIO_REFRESH = 0.25  # IDA/DASSL XRATE: refresh J when cj/cj_J leaves [0.25, 4]
 MAX_NEWTON_FAILURES = 10
 MAX_ERROR_FAILURES = 10
@@ -461,25 +458,7 @@ class NordsieckBDF:
         self.newton_ss = 20.0
 
     def _newton(self, t, y, yp, f, cj, weights, fresh=False):
-        """Iterate y <- y - J^{-1} F with the DASSL/IDA rate test; returns (converged, y, yp).
-
-        With a matrix built for this corrector (``fresh``) that contracts linearly,
-        slower than NEWTON_RATE_REFRESH, the matrix is rebuilt once at the iterate and
-        the iteration goes on with NEWTON_MAX_ITERS + 1 more iterations (measured on
-        rankine: 2 to 5 after the rebuild; with 4 one step failed early and the run
-        fell back into the cycle of failures below). Not when the iterate has crossed
-        a restart switch (a phase line, a kink of the residual) from the prediction:
-        there the rebuilt matrix let tests/field/boiling_10bar.toml creep on at
-        h ~ 1e-10 s for minutes instead of failing in seconds, as before. The case: an
-        algebraic flow whose predictor is far off while the states are well
-        predicted. The friction law p_a - p_b = c m |m| makes the Newton of the flow
-        contract at the rate 1 - m*/m_pred with the matrix of the prediction m_pred:
-        0.39 per iteration in plants/rankine.toml at rtol 1e-6, where the economiser's
-        liquid flows were predicted at 33 kg/s against 16.3 kg/s (a liquid volume's
-        pressure moves 1.6e9 Pa per unit relative mass, so its flows' Nordsieck
-        history is noisy) and every step longer than 2e-4 s failed twice. Rebuilt at
-        the iterate the matrix belongs to the solution's neighbourhood.
-        """
+        """Iterate y <- y - J^{-1} F with the DASSL/IDA rate test; returns (converged, y, yp)."""
         ratio = cj / self.matrix.cj
         scale = 2.0 / (1.0 + ratio) if ratio != 1.0 else 1.0
         # A matrix built for another cj contracts at best by |1 - r| / (1 + r) (the
@@ -487,11 +466,7 @@ class NordsieckBDF:
         c = abs(1.0 - ratio) / (1.0 + ratio)
         self.newton_ss = max(self.newton_ss, c / (1.0 - c))
         first_norm = None
-        y_start, yp_start = y, yp
-        start = 0  # the first iteration with the current matrix
-        max_iters = NEWTON_MAX_ITERS
-        m = 0
-        while m < max_iters:
+        for m in range(NEWTON_MAX_ITERS):
             self.stats.newton_iters += 1
             d = self.matrix.solve(-f)
             if scale != 1.0:
@@ -503,14 +478,12 @@ class NordsieckBDF:
             if not math.isfinite(dnorm):
                 self.failure = StepFailure("the Newton update is not finite")
                 return False, y, yp
-            rate = 0.0
-            if m == start:
+            if m == 0:
                 first_norm = dnorm
                 if dnorm <= 1.0e-4 * NEWTON_TOL:
                     return True, y, yp
             else:
-                k = m - start
-                rate = (dnorm / first_norm) ** (1.0 / k) if first_norm > 0 else 0.0
+                rate = (dnorm / first_norm) ** (1.0 / m) if first_norm > 0 else 0.0
                 if rate > NEWTON_RATE_MAX:
                     self.failure = StepFailure(f"Newton converged too slowly (rate {rate:.2f})")
                     return False, y, yp
@@ -525,33 +498,13 @@ class NordsieckBDF:
             # 0.9 Pa between two liquid volumes, 0.007 kg/s in their flow, accepted).
             if self.newton_ss * dnorm <= NEWTON_TOL and (m > 0 or fresh):
                 return True, y, yp
-            if m + 1 < max_iters:
+            if m + 1 < NEWTON_MAX_ITERS:
                 f = self.residual(t, y, yp)
                 if not all_finite(f):
                     self._note_nonfinite(t, f)
                     return False, y, yp
-                if (
-                    fresh
-                    and rate > NEWTON_RATE_REFRESH
-                    and max_iters == NEWTON_MAX_ITERS
-                    and self._same_side(t, y_start, yp_start, y, yp)
-                ):
-                    # linear convergence with this corrector's own matrix: rebuild it here
-                    self._new_matrix(t, y, yp, f, cj, self.h, weights)
-                    scale = 1.0
-                    start = m + 1
-                    max_iters = start + NEWTON_MAX_ITERS + 1
-            m += 1
-        self.failure = StepFailure(f"Newton did not converge in {max_iters} iterations")
+        self.failure = StepFailure(f"Newton did not converge in {NEWTON_MAX_ITERS} iterations")
         return False, y, yp
-
-    def _same_side(self, t, y0, yp0, y, yp) -> bool:
-        """Whether (y, yp) lies on the same side of every restart switch (a kink of the
-        residual: a phase line) as (y0, yp0); True without such switches."""
-        side = self.matrix.side
-        if side is None:
-            return True
-        return bool(np.array_equal(np.sign(side(t, y0, yp0)), np.sign(side(t, y, yp))))
 
     def _note_nonfinite(self, t, f) -> None:
         bad = np.flatnonzero(~np.isfinite(f)).tolist()
