@@ -4,9 +4,11 @@
    (``Component.guess_nodes``). A fixed-pressure port wins for p, a port that
    supplies its own enthalpy (``FluidPort.h_source``) wins for h.
 2. Missing node guesses are propagated along components (within each stream of
-   a two-stream component, ``medium_groups``), inlet to outlet and
-   back (enthalpy along the design direction), then default to p = 1e5 Pa and
-   h = h(1e5 Pa, 293.15 K) of the node's fluid.
+   a two-stream component, ``medium_groups``): p copied from a neighbour, h inlet
+   to outlet (the design direction); with ``interpolate`` (the steady start's
+   second try) the missing pressures are first interpolated between the guessed
+   ones (a harmonic mean over the node graph, ``_interpolated_pressures``). What is still missing
+   defaults to p = 1e5 Pa and h = h(1e5 Pa, 293.15 K) of the node's fluid.
 3. Components fill their own variables (``Component.initial_guess``) in flow
    order (sources first), so a component sees its upstream neighbours' guesses.
 """
@@ -62,7 +64,53 @@ def _streams(comp) -> list[list]:
     return [g for g in groups + [rest] if g]
 
 
-def initial_guess(system, t0: float) -> np.ndarray:
+def _interpolated_pressures(system, p_known: dict) -> dict:
+    """Pressure guesses [Pa] of the nodes nobody guessed: harmonic interpolation
+    between the guessed ones along the components' streams (``medium_groups``).
+
+    Every component stream couples its nodes (a graph edge, weight 1, between each
+    pair); an unguessed node's pressure is the mean of its neighbours', i.e. the
+    graph Laplacian system L_uu p_u = -L_uk p_k with the guessed nodes k fixed. A
+    node between a 20 bar source and a 1 bar sink through two valves thus starts at
+    10.5 bar, not at either boundary's pressure: copying the upstream pressure
+    would give the first valve dp = 0, where a valve's flow does not depend on its
+    opening (dm/dz = C sqrt(dp) = 0), and a controller driving that valve would be
+    a singular column of the steady-start Jacobian. Nodes connected to no guessed
+    node are left out (they get P_DEFAULT)."""
+    nodes = list(system.node_names)
+    pos = {n: i for i, n in enumerate(nodes)}
+    adj = np.zeros((len(nodes), len(nodes)))
+    for name, comp in system.components.items():
+        for ports in _streams(comp):
+            idx = sorted({pos[system.connections[(name, p.name)]] for p in ports})
+            for a in idx:
+                for b in idx:
+                    if a != b:
+                        adj[a, b] = 1.0
+    known = np.array([n in p_known for n in nodes], dtype=bool)
+    # the unguessed nodes that reach a guessed one (the others keep P_DEFAULT)
+    reach = known.copy()
+    for _ in range(len(nodes)):
+        grown = reach | (adj[:, reach].sum(axis=1) > 0)
+        if np.array_equal(grown, reach):
+            break
+        reach = grown
+    free = reach & ~known
+    if not free.any():
+        return {}
+    lap = np.diag(adj.sum(axis=1)) - adj
+    p_k = np.array([p_known.get(n, 0.0) for n in nodes])[known]
+    p_u = np.linalg.solve(lap[np.ix_(free, free)], -lap[np.ix_(free, known)] @ p_k)
+    return {n: float(p) for n, p in zip(np.array(nodes)[free], p_u, strict=True)}
+
+
+def initial_guess(system, t0: float, interpolate: bool = False) -> np.ndarray:
+    """The starting point y [SI] at t0. ``interpolate``: unguessed node pressures
+    between the guessed ones (``_interpolated_pressures``; the steady start's
+    second try, ``dnasim.start``), otherwise copied from a neighbour along the
+    streams. Never for a given start: there the node guesses set the components'
+    initial states (a volume's mass M = V rho(p, h)), so they are part of the
+    plant's initial condition."""
     y = np.zeros(system.n)
     p_guess, h_guess = {}, {}
     p_rank, h_rank = {}, {}
@@ -77,20 +125,22 @@ def initial_guess(system, t0: float) -> np.ndarray:
                 p_guess[node], p_rank[node] = p, rp
             if h is not None and rh > h_rank.get(node, 0):
                 h_guess[node], h_rank[node] = h, rh
+    if interpolate:
+        p_guess.update(_interpolated_pressures(system, p_guess))
     # propagate along components, within each stream (``medium_groups``): a heat
-    # exchanger's gas side must not take the water side's pressure
+    # exchanger's gas side must not take the water side's pressure or enthalpy
     for _ in range(len(system.components) + 1):
         changed = False
         for name, comp in system.components.items():
             for ports in _streams(comp):
                 nodes = [system.connections[(name, p.name)] for p in ports]
-                inlets = [system.connections[(name, p.name)] for p in ports if p.role == "inlet"]
-                outlets = [system.connections[(name, p.name)] for p in ports if p.role == "outlet"]
                 known_p = [p_guess[n] for n in nodes if n in p_guess]
                 for n in nodes:
                     if n not in p_guess and known_p:
                         p_guess[n] = known_p[0]
                         changed = True
+                inlets = [system.connections[(name, p.name)] for p in ports if p.role == "inlet"]
+                outlets = [system.connections[(name, p.name)] for p in ports if p.role == "outlet"]
                 known_h = [h_guess[n] for n in inlets if n in h_guess]
                 for n in outlets:
                     if n not in h_guess and known_h:

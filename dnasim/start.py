@@ -30,12 +30,16 @@ def initial_values(system, t0: float = 0.0, start: str = "steady"):
     y = initial_guess(system, t0)
     yp = np.zeros(system.n)
     unknown = ~system.accumulator if start == "steady" else system.algebraic.copy()
+    what = f"{start} start of plant '{system.name}'"
     mode_changes: list[str] = []  # components that left their mode at a steady state found
-    for _ in range(3):
+    for attempt in range(3):
         try:
-            y, yp = solve_mixed(
-                system, t0, y, yp, unknown, what=f"{start} start of plant '{system.name}'"
-            )
+            try:
+                y, yp = solve_mixed(system, t0, y, yp, unknown, what=what)
+            except PlantError as first:
+                if start != "steady" or attempt > 0:
+                    raise
+                y, yp = _steady_from_interpolated_guess(system, t0, unknown, what, first)
         except PlantError as err:
             if start != "steady":
                 raise
@@ -55,6 +59,31 @@ def initial_values(system, t0: float = 0.0, start: str = "steady"):
         if not changed:
             break
     return y, yp
+
+
+def _steady_from_interpolated_guess(system, t0, unknown, what, first):
+    """The steady start's second try, from node pressures interpolated between the
+    boundaries (``initial_guess(..., interpolate=True)``); raises ``first``, the
+    first try's error, when this one fails too.
+
+    Why a second guess: the first copies a boundary's pressure into the nodes
+    downstream of it, so a valve between two such nodes starts at dp = 0, where its
+    flow m = C z sqrt(dp) does not depend on its opening. A controller driving that
+    valve is then a null column of the Jacobian (pressure_loop, flow_loop: pid.m_I,
+    pid.v, pid.z against the rows pid.integral, pid.output; smallest singular value
+    6e-11). The interpolated guess gives every valve a pressure difference. It is
+    not the first try because equal weights put the pressure drop anywhere: in
+    plants/superheater_line.toml it spreads the drop of the turbine valve over the
+    superheaters and Newton finds a reverse-flow solution."""
+    from dnasim.initial_guess import initial_guess
+    from dnasim.initialization import solve_mixed
+
+    system.reset_modes()
+    y = initial_guess(system, t0, interpolate=True)
+    try:
+        return solve_mixed(system, t0, y, np.zeros(system.n), unknown, what=what)
+    except PlantError:
+        raise first from None
 
 
 # ------------------------------------------------------------------ steady-start diagnosis

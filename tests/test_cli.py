@@ -235,7 +235,12 @@ def test_components_shows_ports_parameters_units_defaults_equations():
     res = invoke("components", "PIController")
     assert re.search(r"signal inputs.*:\n\s+measured", res.output)
     assert "may be a time function" in res.output
-    assert 'inputs = { measured = "<component>.<output>" }' in res.output
+    # the skeleton lists every input; set_point replaces the parameter setpoint
+    assert (
+        'inputs = { measured = "<component>.<output>", set_point = "<component>.<output>" }'
+        in res.output
+    )
+    assert "when the parameter 'setpoint' is not given" in res.output
     res = invoke("components", "Mixer")
     assert 'ports = { inlet1 = "<node>", inlet2 = "<node>", outlet = "<node>" }' in res.output
 

@@ -221,3 +221,92 @@ def test_a_block_fed_by_its_own_output_is_a_loop():
     plant.link("g.y", "g.u")
     with pytest.raises(PlantError, match="component 'g' reads its own output"):
         plant.compile()
+
+
+# ------------------------------------------------- steady start of the control loops
+#
+# The plant files start steady. Before the fix the initial guess copied the source
+# pressure into every node downstream, so the controlled valve had dp = 0 there:
+# its flow m = C z sqrt(dp) did not depend on z, and the columns pid.m_I, pid.v,
+# pid.z of the steady-start Jacobian had a common null vector (rows pid.integral,
+# pid.output): "singular Jacobian". Now the steady start interpolates the unguessed
+# node pressures between the boundaries.
+
+
+LEAK = 1e-6  # Valve leakage default: z_e = LEAK + (1 - LEAK) z
+
+
+def _valve_m(C, z, dp, dp_reg=10.0):
+    """The Valve law, m = C z_e dp / (dp^2 + dp_reg^2)^(1/4) [kg/s]."""
+    return C * (LEAK + (1 - LEAK) * z) * dp / (dp * dp + dp_reg * dp_reg) ** 0.25
+
+
+def _valve_z(C, m, dp, dp_reg=10.0):
+    """The opening z that passes m [kg/s] at dp [Pa]: the Valve law inverted."""
+    return (m / _valve_m(C, 1.0, dp, dp_reg) - LEAK) / (1 - LEAK)
+
+
+def _steady_rows(tmp_path, text):
+    res = invoke("run", write(tmp_path, text), "-o", tmp_path / "out", "-q")
+    assert res.exit_code == 0, res.output
+    _, _, d = read_results_csv(tmp_path / "out" / "results.csv")
+    return d, d["time"] < 10.0  # the disturbance comes at 10 s
+
+
+def test_pressure_loop_starts_steady_at_its_set_point(tmp_path):
+    d, before = _steady_rows(tmp_path, PRESSURE)
+    C, p_src, p_set, p_sink, z_out = 0.002, 20e5, 10e5, 1e5, 0.5
+    # hand calculation: e = 0 makes p_hdr = 10 bar; the outlet valve passes
+    # m = C z_out sqrt(p_hdr - p_sink); the inlet valve must pass the same flow,
+    # so z = m / (C sqrt(p_src - p_hdr)). Tolerances: 1e-6 relative is the steady
+    # Newton's tolerance (1e-8 of the nominal) with margin.
+    m = _valve_m(C, z_out, p_set - p_sink)
+    z = _valve_z(C, m, p_src - p_set)
+    assert d["pid.e"][0] == pytest.approx(0.0, abs=1e-6 * p_set)
+    assert d["n_hdr.p"][0] == pytest.approx(p_set, rel=1e-6)
+    assert d["v_in.m"][0] == pytest.approx(m, rel=1e-6)
+    assert d["v_out.m"][0] == pytest.approx(m, rel=1e-6)
+    assert d["pid.z"][0] == pytest.approx(z, rel=1e-6)
+    # the integral is the unknown that meets the set point: m_I = z (e = 0, no D part)
+    assert d["pid.m_I"][0] == pytest.approx(z, rel=1e-6)
+    # at rest until the disturbance: a steady state stays put (the integrator's
+    # error control allows drifts of about rtol = 1e-6 of the scale)
+    assert np.ptp(d["n_hdr.p"][before]) < 1e-5 * p_set
+    assert np.ptp(d["pid.z"][before]) < 1e-5
+
+
+def test_flow_loop_starts_steady_at_its_set_point(tmp_path):
+    d, before = _steady_rows(tmp_path, FLOW)
+    C_ctrl, C_fix, p_src, p_sink, m = 0.002, 0.004, 20e5, 5e5, 1.0
+    # hand calculation: the fixed valve (z = 1, z_e = 1) passes m = C_fix sqrt(dp)
+    # (1 + (dp_reg/dp)^2)^(-1/4), so p_mid = p_sink + (m/C_fix)^2 sqrt(1 + (dp_reg/dp)^2)
+    # (one fixed-point pass from dp = (m/C_fix)^2 is exact to (dp_reg/dp)^4 = 3e-15);
+    # the controlled valve's opening is the Valve law inverted at p_src - p_mid;
+    # the lagged sensor reads the flow (d m_s/dt = 0). Tolerances as above.
+    dp_fix = (m / C_fix) ** 2
+    p_mid = p_sink + dp_fix * (1 + (10.0 / dp_fix) ** 2) ** 0.5
+    z = _valve_z(C_ctrl, m, p_src - p_mid)
+    assert d["pid.e"][0] == pytest.approx(0.0, abs=1e-6)
+    assert d["flow.m_s"][0] == pytest.approx(m, rel=1e-6)
+    for name in ("v_ctrl.m", "v_fix.m", "src.m"):
+        assert d[name][0] == pytest.approx(m, rel=1e-6), name
+    assert d["sink.m"][0] == pytest.approx(-m, rel=1e-6)
+    assert d["n_mid.p"][0] == pytest.approx(p_mid, rel=1e-6)
+    assert d["pid.z"][0] == pytest.approx(z, rel=1e-6)
+    assert np.ptp(d["v_ctrl.m"][before]) < 1e-5 * m
+    assert np.ptp(d["pid.z"][before]) < 1e-5
+
+
+def test_steady_guess_interpolates_node_pressures_between_boundaries():
+    from dnasim.initial_guess import initial_guess
+
+    system = loads(PRESSURE, "p.toml").plant.compile()
+    y_steady = initial_guess(system, 0.0, interpolate=True)
+    y_given = initial_guess(system, 0.0)
+    p = {n: y_steady[system.node_index[n]] for n in ("n_a", "n_hdr")}
+    # n_a and n_hdr lie between 20 bar and 1 bar on a chain of three components:
+    # the harmonic interpolation on that path is linear, 20 - 19/3 and 20 - 38/3 bar
+    assert p["n_a"] == pytest.approx(20e5 - 19e5 / 3, rel=1e-12)
+    assert p["n_hdr"] == pytest.approx(20e5 - 38e5 / 3, rel=1e-12)
+    # a given start keeps the copied guess (it sets the volumes' initial masses)
+    assert y_given[system.node_index["n_hdr"]] == pytest.approx(20e5, rel=1e-12)

@@ -16,13 +16,36 @@ from dnasim.components.base import (
 )
 
 
+def check_set_point_unit(comp) -> None:
+    """Raise PlantError when a controller's set point signal (input ``set_point``)
+    and its measured signal differ in dimension (a cascade whose master gives its
+    output in another unit than the slave measures)."""
+    have = getattr(comp, "input_units", {}).get("set_point")
+    want = comp.measured_unit
+    if not comp.setpoint_from_signal or have in (None, "*") or want == "*":
+        return
+    from dnasim.errors import PlantError
+    from dnasim.units import UnitError, parse_unit
+
+    try:
+        same = parse_unit(have).dims == parse_unit(want).dims
+    except UnitError:
+        return
+    if not same:
+        raise PlantError(
+            f"component '{comp.name}' ({type(comp).__name__}): the set point signal [{have}] "
+            f"and the measured signal [{want}] differ in dimension; a cascade's master "
+            f"controller must give its output in the slave's measured unit ({want})"
+        )
+
+
 class PIController(Component):
     """PI controller with an output limited to [z_min, z_max] by switch variables.
 
     Symbols: e error, m_p proportional part, m_I integral part, v = m_p + m_I the
     demanded output, z the output (signal ``z``).
 
-      error         e = s (measured - setpoint(t)),  s = +1 ("measured-setpoint") or -1   (10.13a)
+      error         e = s (measured - w),  s = +1 ("measured-setpoint") or -1             (10.13a)
       proportional  m_p = Kp e                                                            (10.13c)
       integral      dm_I/dt = KI e          (= 0 while saturated, if anti_windup)          (10.13d)
       output        z = v                   mode "free"                                   (10.13b)
@@ -39,6 +62,11 @@ class PIController(Component):
     lower: g = -sgn(Kp) e), and m_I is reset to z_max - m_p (z_min - m_p) so the
     output stays continuous (bumpless transfer).
     Given start: m_I starts at ``integral0``.
+
+    The set point w [measured unit] is the parameter ``setpoint`` (a number or a
+    time function) or, when that is not given, the signal input ``set_point``
+    (cascade control: a master controller's output in this controller's
+    measured unit).
     """
 
     PARAMS = (
@@ -53,7 +81,8 @@ class PIController(Component):
         Param(
             "setpoint",
             "1",
-            doc="set point, in the unit of the measured signal",
+            None,
+            "set point, in the unit of the measured signal (not given: the signal input set_point)",
             time_function=True,
             per_signal=1,
         ),
@@ -84,7 +113,14 @@ class PIController(Component):
             per_signal=1,
         ),
     )
-    SIGNAL_INPUTS = (SignalPort("measured", "*", "measured value (any unit)"),)
+    SIGNAL_INPUTS = (
+        SignalPort("measured", "*", "measured value (any unit)"),
+        SignalPort(
+            "set_point",
+            "*",
+            "set point w in the measured unit (when the parameter 'setpoint' is not given)",
+        ),
+    )
     SIGNAL_OUTPUTS = (SignalPort("z", "1", "limited output", variable="z"),)
     USES_MEDIUM = False
 
@@ -94,6 +130,19 @@ class PIController(Component):
 
             raise PlantError(f"component '{self.name}': z_max must be greater than z_min")
         self.sign = 1.0 if self.params["error_sign"] == "measured-setpoint" else -1.0
+        #: the set point is the signal input set_point (cascade), not a time function
+        self.setpoint_from_signal = (
+            self.params["setpoint"] is None and "setpoint" not in self.signal_unit_values
+        )
+
+    def signal_inputs(self):
+        return list(self.SIGNAL_INPUTS) if self.setpoint_from_signal else [self.SIGNAL_INPUTS[0]]
+
+    def set_point_value(self, t, x) -> float:
+        """The set point w [measured unit]: the signal input or the time function."""
+        if self.setpoint_from_signal:
+            return x["set_point"]
+        return self.param_at("setpoint", t)
 
     def reset_discrete_state(self, modes):
         modes["mode"] = "free"
@@ -125,9 +174,10 @@ class PIController(Component):
 
     def output_values(self, t, x, xp):
         P = self.params
-        return [self.param_at("setpoint", t), P["z_min"], P["z_max"]]
+        return [self.set_point_value(t, x), P["z_min"], P["z_max"]]
 
     def variables(self):
+        check_set_point_unit(self)
         return [
             Variable("e", self.error_unit, self.params["measured_nominal"] * 0.01, doc="error"),
             Variable("m_p", "1", 1.0, doc="proportional part"),
@@ -140,10 +190,10 @@ class PIController(Component):
         return [
             Equation(
                 "error",
-                y=("e", "measured"),
-                doc="e = sign (measured - setpoint)   (10.13a)",
+                y=("e", "measured", *(("set_point",) if self.setpoint_from_signal else ())),
+                doc="e = sign (measured - w)   (10.13a)",
                 residual=lambda t, x, xp: (
-                    x["e"] - self.sign * (x["measured"] - self.param_at("setpoint", t))
+                    x["e"] - self.sign * (x["measured"] - self.set_point_value(t, x))
                 ),
             ),
             Equation(

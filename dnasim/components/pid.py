@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from dnasim.components.base import Component, Equation, Output, Param, SignalPort, Switch, Variable
+from dnasim.components.controller import check_set_point_unit
 from dnasim.errors import PlantError
 
 __all__ = ["PIDController"]
@@ -17,7 +18,7 @@ class PIDController(Component):
 
     Symbols (units: [m] the measured signal's unit, [u] the output's unit ``unit``):
 
-      error         e = s (measured - w(t))                     [m]   s = +1 or -1 (error_sign)
+      error         e = s (measured - w)                        [m]   s = +1 or -1 (error_sign)
       proportional  m_p = Kp e                                  [u]
       derivative    (T_d/N) dx_f/dt = e_D - x_f,   e_D = s (measured - c_d w(t))        [m]
                     m_D = Kp N (e_D - x_f)                      [u]   (T_d > 0; else m_D = 0)
@@ -26,6 +27,11 @@ class PIDController(Component):
                     dm_I/dt = (z - v)/T_t                             (manual: tracking)
       demand        v = m_p + m_I + m_D                         [u]
       output        z = v (mode free), z_max (high), z_min (low), z_track (manual)   [u]
+
+    The set point w [m] is the parameter ``setpoint`` (a number or a time
+    function w(t)) or, when that is not given, the signal input ``set_point``
+    (cascade control: a master controller's output, ``inputs = { set_point =
+    "master.z" }``; the master's ``unit`` must be the slave's measured unit).
 
     Transfer function from e to v in the free mode (T_i, T_d > 0):
       Kp (1 + 1/(T_i s) + T_d s / (1 + T_d s / N)).
@@ -70,7 +76,9 @@ class PIDController(Component):
         Param(
             "setpoint",
             "1",
-            doc="set point w(t), in the unit of the measured signal",
+            None,
+            "set point w(t), in the unit of the measured signal (not given: the signal "
+            "input set_point)",
             time_function=True,
             per_signal=1,
         ),
@@ -113,6 +121,11 @@ class PIDController(Component):
     SIGNAL_INPUTS = (
         SignalPort("measured", "*", "measured value (any unit)"),
         SignalPort("track", "*", "actuator position / manual value (only with tracking = true)"),
+        SignalPort(
+            "set_point",
+            "*",
+            "set point w in the measured unit (when the parameter 'setpoint' is not given)",
+        ),
     )
     SIGNAL_OUTPUTS = (SignalPort("z", "1", "limited output", variable="z"),)
     USES_MEDIUM = False
@@ -159,11 +172,19 @@ class PIDController(Component):
             )
         self.sign = 1.0 if P["error_sign"] == "measured-setpoint" else -1.0
         self.span_out = span_out
+        #: the set point is the signal input set_point (cascade), not a time function
+        self.setpoint_from_signal = (
+            P["setpoint"] is None and "setpoint" not in self.signal_unit_values
+        )
 
     # ---------------------------------------------------------------- ports
     def signal_inputs(self):
         ins = [self.SIGNAL_INPUTS[0]]
-        return ins + [self.SIGNAL_INPUTS[1]] if self.params["tracking"] else ins
+        if self.params["tracking"]:
+            ins.append(self.SIGNAL_INPUTS[1])
+        if self.setpoint_from_signal:
+            ins.append(self.SIGNAL_INPUTS[2])
+        return ins
 
     def signal_outputs(self):
         return [SignalPort("z", self.params["unit"], "limited output", variable="z")]
@@ -183,6 +204,7 @@ class PIDController(Component):
         return self.params["T_d"] > 0
 
     def variables(self):
+        check_set_point_unit(self)
         P = self.params
         unit = P["unit"]
         span_m = P["measured_span"] or P["measured_nominal"]
@@ -218,7 +240,13 @@ class PIDController(Component):
         ]
 
     def output_values(self, t, x, xp):
-        return [self.param_at("setpoint", t), self.params["z_min"], self.params["z_max"]]
+        return [self.set_point_value(t, x), self.params["z_min"], self.params["z_max"]]
+
+    def set_point_value(self, t, x) -> float:
+        """The set point w [measured unit]: the signal input or the time function."""
+        if self.setpoint_from_signal:
+            return x["set_point"]
+        return self.param_at("setpoint", t)
 
     # ------------------------------------------------------------ equations
     def _automatic(self, t) -> bool:
@@ -232,13 +260,15 @@ class PIDController(Component):
     def equations(self):
         sign, Kp = self.sign, self.Kp
         track = ("track",) if self.params["tracking"] else ()
+        w = ("set_point",) if self.setpoint_from_signal else ()
+        w_d = w if self.params["c_d"] != 0.0 else ()
         eqs = [
             Equation(
                 "error",
-                y=("e", "measured"),
-                doc="e = s (measured - w(t))",
+                y=("e", "measured", *w),
+                doc="e = s (measured - w)",
                 residual=lambda t, x, xp: (
-                    x["e"] - sign * (x["measured"] - self.param_at("setpoint", t))
+                    x["e"] - sign * (x["measured"] - self.set_point_value(t, x))
                 ),
             ),
             Equation(
@@ -253,14 +283,14 @@ class PIDController(Component):
             eqs += [
                 Equation(
                     "filter",
-                    y=("x_f", "measured"),
+                    y=("x_f", "measured", *w_d),
                     yp=("x_f",),
                     doc="(T_d/N) dx_f/dt = e_D - x_f",
                     residual=lambda t, x, xp: T_f * xp["x_f"] - (self._e_d(t, x) - x["x_f"]),
                 ),
                 Equation(
                     "derivative",
-                    y=("m_D", "x_f", "measured"),
+                    y=("m_D", "x_f", "measured", *w_d),
                     doc="m_D = Kp N (e_D - x_f)",
                     residual=lambda t, x, xp: x["m_D"] - Kp * N * (self._e_d(t, x) - x["x_f"]),
                 ),
@@ -290,7 +320,7 @@ class PIDController(Component):
         return eqs
 
     def _e_d(self, t, x):
-        return self.sign * (x["measured"] - self.params["c_d"] * self.param_at("setpoint", t))
+        return self.sign * (x["measured"] - self.params["c_d"] * self.set_point_value(t, x))
 
     def _integral(self, t, x, xp):
         P = self.params

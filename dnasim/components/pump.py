@@ -10,13 +10,14 @@ from dnasim.components.base import (
     Component,
     Equation,
     FluidPort,
+    Output,
     Param,
     SignalPort,
     Variable,
     flow_through_ports,
     shaft_work_equations,
 )
-from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean
+from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean, upwind_weight
 from dnasim.errors import PlantError
 
 
@@ -63,8 +64,31 @@ class Pump(Component):
     through the outlet carries h_2. The energy flows at the ports and P balance
     exactly: E_out - E_in = P. When p_out < p_in (a stopped pump, or flow beyond
     the curve's run-out) the smooth max (softplus, width dp_reg) makes the flow
-    isenthalpic instead of cooling it. At zero flow the shaft power is zero: the
-    shut-off power of a real pump (heating the trapped water) is not modelled.
+    isenthalpic instead of cooling it. Without a casing (below) the shaft power is
+    zero at zero flow.
+
+    Shut-off heating (give ``M_casing``): the fluid in the pump is a mixed volume of
+    constant mass M [kg] with its own enthalpy h_2 [J/kg], a differential variable,
+    which leaves at both ports (also on reverse flow); the shaft power, including the
+    losses P_0 r^3 that remain at zero flow (disk friction, recirculation; affinity
+    law P ~ r^3), heats it:
+
+      power     P = w(m) softplus(p_out - p_in, dp_reg)/(rho eta) + P_0 r^3          [W]
+      energy    M dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_2) + P               [W]
+                (h_in, h_out the inlet and outlet nodes' h; w the smooth max(m, 0))
+
+    With flow, h_2 relaxes in M/m seconds to h_in + P/m = h_in + dp/(rho eta) +
+    P_0 r^3/m: the enthalpy rise P_shaft/m, regularised at zero flow by the mass M.
+    Against a closed valve (m = 0) dh_2/dt = P_0 r^3/M [J/(kg s)], so the water in the
+    pump warms at dT/dt = P_0 r^3/(M c_p) [K/s] until the flow resumes and carries
+    the heat off. The ports' energy flows, P and the stored energy M h_2 balance
+    exactly: E_in - E_out + P = M dh_2/dt. At zero flow the smooth upwind weight
+    w(0) = 3/16 m_eps [kg/s] (m_eps = 1e-3 m_nominal) still exchanges casing water
+    with both nodes, a loss of w(0) (2 h_2 - h_in - h_out) [W] (0.1 to 0.6 % of P_0
+    in tests/plants/pump_shutoff.toml), and adds w(0) dp/(rho eta) to P (2.6 W
+    there). M_casing is the water in the casing; the
+    casing's metal can be lumped in as the water mass of equal heat capacity
+    C_metal/c_p [kg].
     """
 
     PARAMS = (
@@ -118,6 +142,20 @@ class Pump(Component):
         ),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
+        Param(
+            "M_casing",
+            "kg",
+            None,
+            "mass of the fluid in the pump: a heated mixed volume (shut-off heating)",
+            min=0.0,
+        ),
+        Param(
+            "P_shutoff",
+            "W",
+            0.0,
+            "shaft power at zero flow and nominal speed, P_0 (with M_casing)",
+            min=0.0,
+        ),
     )
     FLUID_PORTS = (
         FluidPort("inlet", "inlet", "m", "resistance", "suction"),
@@ -133,6 +171,13 @@ class Pump(Component):
     def setup(self):
         P = self.params
         self.speed_from_signal = P["speed"] is None
+        #: the fluid in the pump is a heated volume (M_casing given): h_2 is a state
+        self.casing = P["M_casing"] is not None and P["M_casing"] > 0.0
+        if P["P_shutoff"] > 0.0 and not self.casing:
+            raise PlantError(
+                f"component '{self.name}' (Pump): P_shutoff needs M_casing > 0 kg (the water "
+                "in the pump that the shut-off power heats)"
+            )
         self.H0, self.a, self.b = self._curve()
         self._head_table = None
         if P["head_curve"] == "table":
@@ -204,7 +249,12 @@ class Pump(Component):
         return f, float(q[-1]), float(h[-1]), float(d(0.0)), float(d(q[-1]))
 
     def fluid_ports(self):
-        return flow_through_ports(self.m_eps, "h_2")
+        ports = flow_through_ports(self.m_eps, "h_2")
+        if self.casing:  # the casing's fluid leaves at both ports
+            ports[0] = FluidPort(
+                "inlet", "inlet", "m", "resistance", h_out="h_2", h_source=False, m_eps=self.m_eps
+            )
+        return ports
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.speed_from_signal else []
@@ -214,7 +264,12 @@ class Pump(Component):
         return [
             Variable("m", "kg/s", mn, doc="mass flow, inlet -> outlet"),
             Variable("H", "m", max(self.H0, 1.0), doc="head"),
-            Variable("h_2", "J/kg", 1e5, doc="enthalpy of the fluid leaving at the outlet"),
+            Variable(
+                "h_2",
+                "J/kg",
+                1e5,
+                doc="enthalpy of the fluid leaving at the outlet (with M_casing: in the pump)",
+            ),
             Variable("P", "W", max(mn * G * self.H0, 1.0), doc="shaft power"),
             Variable(
                 "W",
@@ -228,6 +283,8 @@ class Pump(Component):
     def equations(self):
         n = ("n",) if self.speed_from_signal else ()
         nodes = ("inlet.p", "inlet.h", "outlet.p", "outlet.h")
+        if self.casing:
+            return self._casing_equations(n, nodes)
         return [
             Equation(
                 "head",
@@ -252,14 +309,85 @@ class Pump(Component):
             ),
         ] + shaft_work_equations(self, "inlet.h", "h_2")
 
+    def _casing_equations(self, n, nodes):
+        """head, pressure, power and energy with the heated casing volume (docstring)."""
+        nodes = (*nodes, "h_2")  # the density is the casing fluid's
+        head = [
+            Equation(
+                "head",
+                y=("H", "m") + nodes + n,
+                unit="m",
+                doc="H = H0 r^2 + a r Q + b Q sqrt(Q^2 + Q_reg^2)",
+                residual=self._head,
+            ),
+            Equation(
+                "pressure",
+                y=("H", "m") + nodes,
+                unit="Pa",
+                doc="p_out - p_in = rho g H",
+                residual=self._pressure,
+            ),
+        ]
+        M = self.params["M_casing"]
+        return (
+            head
+            + [
+                Equation(
+                    "power",
+                    y=("P", "m") + nodes + n,
+                    unit="W",
+                    doc="P = w(m) softplus(p_out - p_in)/(rho eta) + P_0 r^3",
+                    residual=lambda t, x, xp: x["P"] - self.shaft_power(t, x),
+                ),
+                Equation(
+                    "energy",
+                    y=("h_2", "m", "P", "inlet.h", "outlet.h"),
+                    yp=("h_2",),
+                    unit="W",
+                    doc=f"{M:g} dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_2) + P",
+                    residual=self._casing_energy,
+                ),
+            ]
+            + shaft_work_equations(self, "inlet.h", "h_2")[1:]
+        )  # work: dW/dt = P
+
+    def shaft_power(self, t, x) -> float:
+        """P [W] with the casing: w(m) softplus(dp, dp_reg)/(rho eta) + P_0 r^3."""
+        rho = self.density(x)
+        r = self.speed(t, x)
+        eta = self.efficiency(x["m"] / rho, r)
+        dp = float(softplus(x["outlet.p"] - x["inlet.p"], self.params["dp_reg"]))
+        w = float(upwind_weight(x["m"], self.m_eps))
+        return w * dp / (rho * eta) + self.params["P_shutoff"] * r**3
+
+    def _casing_energy(self, t, x, xp):
+        m, h = x["m"], x["h_2"]
+        w_in = float(upwind_weight(m, self.m_eps))
+        w_back = float(upwind_weight(-m, self.m_eps))
+        gain = w_in * (x["inlet.h"] - h) + w_back * (x["outlet.h"] - h) + x["P"]
+        return self.params["M_casing"] * xp["h_2"] - gain
+
+    def outputs(self):
+        return [Output("T_2", "K", "temperature at h_2 and the discharge pressure")]
+
+    def output_values(self, t, x, xp):
+        return [float(self.medium.state(x["outlet.p"], x["h_2"]).T)]
+
     # --------------------------------------------------------------- physics
     def speed(self, t, x):
         """Relative speed r = n/n_0 [-]."""
         return x["n"] if self.speed_from_signal else self.param_at("speed", t)
 
     def density(self, x):
-        """Density of the fluid entering the pump [kg/m3] (smooth upwind by m)."""
+        """Density of the fluid entering the pump [kg/m3] (smooth upwind by m); with
+        the casing, of the fluid in the pump, rho(p_in, h_2). Why not upwind there:
+        against a closed valve the casing water is hotter than the suction, and a
+        density blended across the flow band |m| < m_eps makes p_out - p_in =
+        rho g H rise with m near m = 0 (14 K: +2.7e5 Pa per kg/s against the curve's
+        -200), so the reopening valve found no unique flow (Newton diverged)."""
         medium = self.medium
+        if self.casing:
+            return float(medium.state(x["inlet.p"], x["h_2"]).rho)
         rho_in = medium.state(x["inlet.p"], x["inlet.h"]).rho
         rho_out = medium.state(x["outlet.p"], x["outlet.h"]).rho
         return float(upwind_mean(x["m"], rho_in, rho_out, self.m_eps))
@@ -321,6 +449,9 @@ class Pump(Component):
         dh = max(rho * G * H, 0.0) / (rho * self.efficiency(mn / rho, r))
         x["h_2"] = x["inlet.h"] + dh
         x["P"] = mn * dh
+        if self.casing:
+            x["P"] += self.params["P_shutoff"] * r**3
+            x["h_2"] += self.params["P_shutoff"] * r**3 / mn
         x["W"] = 0.0
         # the discharge node: the pump's pressure rise on the suction guess
         x["outlet.p"] = max(x["inlet.p"] + rho * G * H, x["inlet.p"])
