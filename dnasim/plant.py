@@ -26,6 +26,8 @@ holds no System and no Results, and nothing below holds the plant.
 
 from __future__ import annotations
 
+import numpy as np
+
 from dnasim.backends import SOLVER_OPTIONS
 from dnasim.compiler import check as check_plant
 from dnasim.compiler import compile as compile_plant
@@ -62,6 +64,13 @@ class Plant(PlantGraph):
             given = simulation_keywords(settings)
             if kwargs.get("solver") is not None:  # the solver object brings its own options
                 given = {k: v for k, v in given.items() if k not in SOLVER_OPTIONS}
+            if t_end is not None and given.get("t_eval") is not None:
+                # the file's output grid, cut at (and ending on) the t_end asked for
+                grid = np.asarray(given["t_eval"], dtype=float)
+                grid = grid[grid <= t_end]
+                given["t_eval"] = (
+                    grid if grid.size and grid[-1] == t_end else (np.append(grid, t_end))
+                )
             kwargs = {**given, **kwargs}
             if t_end is None:
                 t_end = settings.t_end

@@ -288,3 +288,13 @@ def test_plant_spec_from_python_builds_and_simulates():
     assert back == spec
     res = back.build().simulate(10.0)
     assert res.success and res["pipe.m[1]"][-1] > 0
+
+
+def test_a_shorter_run_of_a_file_with_an_output_grid_ends_on_its_own_t_end():
+    # plants/evaporator.toml has output_interval = 5 s up to 1200 s; simulate(t_end=12)
+    # must cut that grid at 12 s (it used to refuse: "t_eval must lie within t_span")
+    from dnasim import load_plant
+
+    res = load_plant(ROOT / "plants" / "evaporator.toml").simulate(t_end=12.0)
+    assert res.success, res.message
+    assert list(res.t) == [0.0, 5.0, 10.0, 12.0]
