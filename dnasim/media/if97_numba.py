@@ -687,35 +687,31 @@ def _single_out(p, h, T, rec, reg, st):
 
 
 @_njit
+def _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status):
+    """Write the state tuple r of ``ph_scalar`` into position i of the output arrays."""
+    T[i] = r[0]
+    rho[i] = r[1]
+    u[i] = r[2]
+    s[i] = r[3]
+    cp[i] = r[4]
+    x[i] = r[5]
+    dp[i] = r[6]
+    dh[i] = r[7]
+    region[i] = r[8]
+    status[i] = r[9]
+
+
+@_njit
 def _ph_loop(p, h, T, rho, u, s, cp, x, dp, dh, region, status):
     for i in range(p.size):
-        r = ph_scalar(p[i], h[i])
-        T[i] = r[0]
-        rho[i] = r[1]
-        u[i] = r[2]
-        s[i] = r[3]
-        cp[i] = r[4]
-        x[i] = r[5]
-        dp[i] = r[6]
-        dh[i] = r[7]
-        region[i] = r[8]
-        status[i] = r[9]
+        _store(ph_scalar(p[i], h[i]), i, T, rho, u, s, cp, x, dp, dh, region, status)
 
 
 @_njit
 def _ph_branch_loop(p, h, branch, T, rho, u, s, cp, x, dp, dh, region, status):
     for i in range(p.size):
         r = ph_branch_scalar(p[i], h[i], branch[i])
-        T[i] = r[0]
-        rho[i] = r[1]
-        u[i] = r[2]
-        s[i] = r[3]
-        cp[i] = r[4]
-        x[i] = r[5]
-        dp[i] = r[6]
-        dh[i] = r[7]
-        region[i] = r[8]
-        status[i] = r[9]
+        _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status)
 
 
 def ph_arrays(p, h, branch=None) -> K.PhResult:
