@@ -285,6 +285,22 @@ class Pump(Component):
         nodes = ("inlet.p", "inlet.h", "outlet.p", "outlet.h")
         if self.casing:
             return self._casing_equations(n, nodes)
+        return (
+            self._head_equations(n, nodes)
+            + [
+                Equation(
+                    "enthalpy",
+                    y=("h_2", "m") + nodes + n,
+                    unit="J/kg",
+                    doc="h_2 = h_in + softplus(p_out - p_in)/(rho eta)",
+                    residual=self._enthalpy,
+                ),
+            ]
+            + shaft_work_equations(self, "inlet.h", "h_2")
+        )
+
+    def _head_equations(self, n, nodes):
+        """The head curve and the pressure rise; nodes: the variables rho is read from."""
         return [
             Equation(
                 "head",
@@ -300,34 +316,12 @@ class Pump(Component):
                 doc="p_out - p_in = rho g H",
                 residual=self._pressure,
             ),
-            Equation(
-                "enthalpy",
-                y=("h_2", "m") + nodes + n,
-                unit="J/kg",
-                doc="h_2 = h_in + softplus(p_out - p_in)/(rho eta)",
-                residual=self._enthalpy,
-            ),
-        ] + shaft_work_equations(self, "inlet.h", "h_2")
+        ]
 
     def _casing_equations(self, n, nodes):
         """head, pressure, power and energy with the heated casing volume (docstring)."""
         nodes = (*nodes, "h_2")  # the density is the casing fluid's
-        head = [
-            Equation(
-                "head",
-                y=("H", "m") + nodes + n,
-                unit="m",
-                doc="H = H0 r^2 + a r Q + b Q sqrt(Q^2 + Q_reg^2)",
-                residual=self._head,
-            ),
-            Equation(
-                "pressure",
-                y=("H", "m") + nodes,
-                unit="Pa",
-                doc="p_out - p_in = rho g H",
-                residual=self._pressure,
-            ),
-        ]
+        head = self._head_equations(n, nodes)
         M = self.params["M_casing"]
         return (
             head
