@@ -132,6 +132,8 @@ class NordsieckBDF:
     h0 : initial step size (None: estimated as in IDA)
     max_step : largest step
     error_mask : 1 for the components counted in the error test, 0 for excluded ones
+    norm_mask : 1 for the components counted in the Newton convergence norm and the
+        initial step's norm of y', 0 for quadratures (None: all counted)
     matrix : IterationMatrix
     fixed_order, fixed_step : for order-verification tests only: keep q and h constant
     """
@@ -156,6 +158,7 @@ class NordsieckBDF:
         equation_names=None,
         fixed_order: bool = False,
         fixed_step: bool = False,
+        norm_mask: np.ndarray | None = None,
     ):
         self.residual = residual
         self.n = y0.size
@@ -164,6 +167,7 @@ class NordsieckBDF:
         self.max_order = max_order
         self.max_step = max_step
         self.error_mask = error_mask
+        self.norm_mask = np.ones(self.n) if norm_mask is None else norm_mask
         self.matrix = matrix
         self.stats = stats
         self.t_scale = t_scale
@@ -184,9 +188,10 @@ class NordsieckBDF:
 
     # -- starting and restarting -----------------------------------------------------------
     def initial_step(self, y, yp) -> float:
-        """IDA's choice: 0.001 of the span, and no more than 0.5 / ||y'||."""
+        """IDA's choice: 0.001 of the span, and no more than 0.5 / ||y'|| (quadratures
+        not counted: a running integral's y' says nothing of the time scales)."""
         h = 1.0e-3 * self.t_scale
-        ypnorm = self.norm(yp, self.weights_for(y))
+        ypnorm = self.norm(yp, self.weights_for(y) * self.norm_mask)
         if ypnorm * h > 0.5:
             h = 0.5 / ypnorm
         # Not below a few hundred ulp of t: a restart at a large t with a fast-growing
@@ -284,6 +289,7 @@ class NordsieckBDF:
         """
         weights = self.weights_for(self.y)
         error_weights = weights * self.error_mask
+        newton_weights = weights * self.norm_mask
         n_newton_fail = 0
         n_error_fail = 0
         reinitialized = False
@@ -310,7 +316,7 @@ class NordsieckBDF:
             z_pred = nd.predict(self.z, q)
             cj = nd.harmonic(q) / h
             t_res = np.nextafter(t_new, -np.inf) if (left_limit and t_new == t_stop) else t_new
-            converged, y, yp, delta = self._correct(t_res, z_pred, cj, h, weights)
+            converged, y, yp, delta = self._correct(t_res, z_pred, cj, h, weights, newton_weights)
             if not converged:
                 self.stats.rejected_newton += 1
                 n_newton_fail += 1
@@ -408,8 +414,13 @@ class NordsieckBDF:
         self.jacobian_current = False
 
     # -- the corrector ---------------------------------------------------------------------
-    def _correct(self, t, z_pred, cj, h, weights):
-        """Modified Newton for the corrector; returns (converged, y, yp, Delta)."""
+    def _correct(self, t, z_pred, cj, h, weights, newton_weights):
+        """Modified Newton for the corrector; returns (converged, y, yp, Delta).
+
+        ``weights``: the error weights of every component (the finite-difference
+        increments); ``newton_weights``: those of the convergence norm (0 for the
+        quadratures: their Newton error is h times the error of the integrand, which
+        the others' convergence bounds; nothing reads them back)."""
         y_pred = z_pred[0]
         yp_pred = z_pred[1] / h
         for attempt in range(2):
@@ -427,7 +438,7 @@ class NordsieckBDF:
                 )
                 if refresh:
                     self._new_matrix(t, y, yp, f, cj, h, weights)
-                converged, y, yp = self._newton(t, y, yp, f, cj, weights, fresh=refresh)
+                converged, y, yp = self._newton(t, y, yp, f, cj, newton_weights, fresh=refresh)
             except ResidualDomainError as exc:
                 self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
                 converged = False
