@@ -120,12 +120,17 @@ class IterationMatrix:
             pattern.sum_duplicates()
             pattern.sort_indices()
             self.pattern = pattern
-            structural = scipy.sparse.csc_matrix(sparsity, dtype=float, copy=True)
-            structural.data[:] = 1.0
-            structural.eliminate_zeros()
-            # the ordering from the entries that can be non-zero: the added diagonal's
-            # stored zeros would widen the band (band.BandOrdering.of)
-            self.band = BandOrdering.of(pattern, structural) or BandOrdering.of(pattern)
+            self.band = BandOrdering.of(pattern)
+            if self.band is None or not self.band.worthwhile:
+                # the ordering from the entries that can be non-zero: the added
+                # diagonal's stored zeros can widen the band (band.BandOrdering.of; the
+                # steam pipe: kl, ku = 158, 157 -> 11, 15). Only then: on the air pipe
+                # reversal (tests/test_plant_reverse_flow.py) the other LU's round-off
+                # took the run into a Newton failure at 110 s (issue 7's reverse flow)
+                structural = scipy.sparse.csc_matrix(sparsity, dtype=float, copy=True)
+                structural.data[:] = 1.0
+                structural.eliminate_zeros()
+                self.band = BandOrdering.of(pattern, structural) or self.band
             if self.band is not None and not self.band.worthwhile:
                 self.band = None
             self.groups = colour_columns(pattern)
