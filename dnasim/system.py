@@ -67,8 +67,8 @@ Quadratures: ``quadrature`` marks the variables X that are pure integrals of the
 others, found from the sparsity: X' appears in exactly one equation and X in
 none (dX/dt = f(t, other y, y'), X read by no equation): the accumulators
 M_passed [kg], H_passed [J], Q_passed [J], W [J]. As SUNDIALS IDA's quadratures
-with errconQ = false, the solver leaves them out of its error test, its Newton
-convergence norm and its initial-step norm, and integrates them with the same
+with errconQ = false, the solver leaves them out of its error test and its Newton
+convergence norm, and integrates them with the same
 BDF formula (they stay in the Newton system, so linear invariants such as a
 mass balance over a boundary's M_passed hold to round-off). A declared
 accumulator that some equation reads (a P-only controller's bias m_I, held by

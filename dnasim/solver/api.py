@@ -80,7 +80,7 @@ def solve_dae(
         y_i' = f_i(t, other y, y') set by one equation, y_i read by no equation
         (a running integral such as the mass that has passed a boundary). As
         SUNDIALS IDA's quadratures with errconQ = false they are left out of the
-        error test, the Newton convergence norm and the initial-step norm; they
+        error test and the Newton convergence norm (not the initial step's); they
         are still integrated by the same BDF formula (in the Newton system, so a
         linear invariant tying them to the states holds to round-off).
     rtol, atol : error tolerances; weights 1 / (rtol |y_i| + atol_i); atol
@@ -215,7 +215,7 @@ def solve_dae(
         error_mask = np.ones(problem.n)
         if exclude_algebraic_from_error:
             error_mask[algebraic_mask] = 0.0
-        norm_mask = np.ones(problem.n)  # Newton's and the initial step's norm
+        norm_mask = np.ones(problem.n)  # Newton's convergence norm
         if problem.quadrature is not None:
             error_mask[problem.quadrature] = 0.0
             norm_mask[problem.quadrature] = 0.0
