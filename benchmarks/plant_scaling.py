@@ -122,6 +122,7 @@ def run(n, solver, rtol=1e-6, linsolver=None):
                 y0,
                 yp0,
                 algebraic=dae.algebraic,
+                quadrature=dae.quadrature,
                 rtol=rtol,
                 atol=dae.atol_vector(1e-6, y0),
                 jac_sparsity=dae.jac_sparsity,

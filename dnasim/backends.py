@@ -54,6 +54,9 @@ class Problem:
     #: reinitialise(t, y, yp) -> (y, yp): consistent values after a jump, the
     #: differential variables kept (for backends that restart by themselves, IDA)
     reinitialise: object = None
+    #: mask of the quadratures (running integrals read by no equation,
+    #: ``System.quadrature``): out of the error test and Newton's norm; None: none
+    quadrature: np.ndarray | None = None
 
 
 @dataclass
@@ -89,6 +92,7 @@ class NordsieckBDF:
                 pb.y0,
                 pb.yp0,
                 algebraic=pb.algebraic,
+                quadrature=pb.quadrature,
                 jac_sparsity=pb.jac_sparsity,
                 calc_initial=False,
                 variable_names=pb.variable_names,

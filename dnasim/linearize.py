@@ -103,6 +103,7 @@ def _operating_point(system, sim, t):
         y0,
         yp0,
         algebraic=dae.algebraic,
+        quadrature=dae.quadrature,
         jac_sparsity=dae.jac_sparsity,
         calc_initial=False,
         rtol=rtol,

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from dnasim.solver import band as band_module
 from dnasim.solver import bdf, linear_algebra, solve_dae
 from dnasim.solver.band import BandLU, BandOrdering
 from dnasim.solver.linear_algebra import IterationMatrix
@@ -89,6 +90,52 @@ def test_iteration_matrix_stores_the_pattern_only_and_uses_the_band():
     ref = np.linalg.solve(m.matrix.toarray(), rhs)
     # a diagonally dominant matrix (cond < 10): agreement to a few eps
     assert np.max(np.abs(x - ref)) <= 100 * EPS * np.max(np.abs(ref))
+
+
+def test_band_ordering_ignores_the_added_diagonal(monkeypatch):
+    # KEEP_DIAGONAL stores zeros at (i, i), pairing equation i with unknown i, which a
+    # shuffled layout does not relate: ordered with them the band is wide (the steam
+    # pipe: kl, ku = 158, 157 instead of 11, 15); the ordering of the entries that can
+    # be non-zero keeps the chain's 2 + 2 diagonals and leaves those zeros out
+    n = 40
+    pattern, pr, pc = shuffled_chain(n, seed=3)
+    with_diagonal = sp.csc_matrix(pattern + sp.eye(n))
+    wide = BandOrdering.of(with_diagonal)
+    k = np.linspace(1.0, 2.0, n)
+
+    def residual(t, y, yp):
+        x = np.empty(n)
+        x[pc] = y
+        xp = np.empty(n)
+        xp[pc] = yp
+        f = xp + k * x
+        f[1:] -= 0.5 * x[:-1]
+        f[:-1] -= 0.25 * x[1:]
+        return f[pr]
+
+    if not linear_algebra.KEEP_DIAGONAL:
+        pytest.skip("no diagonal added")
+    # the matrix orders without the stored zeros only when the pattern's own ordering
+    # is not worth a band (linear_algebra): make this small chain's wide band not pay
+    monkeypatch.setattr(band_module, "BAND_NARROW", 0)
+    monkeypatch.setattr(band_module, "BAND_FILL_MAX", 2.0)
+    assert not wide.worthwhile
+    m = IterationMatrix(residual, n, sparsity=pattern)
+    assert m.band.kl <= 2 and m.band.ku <= 2
+    assert wide.kl + wide.ku > 2 * (m.band.kl + m.band.ku)
+    assert m.band.outside is not None
+    y, yp = np.ones(n), np.zeros(n)
+    m.evaluate(0.0, y, yp, residual(0.0, y, yp), 10.0, 0.1, np.ones(n))
+    rhs = np.arange(n, dtype=float)
+    for poke in (False, True):
+        if poke:
+            # a non-zero where the band has no room: that matrix goes to SuperLU
+            m.matrix.data[m.band.outside[0]] = 1e-3
+        m.factorize()
+        assert isinstance(m._lu, BandLU) is not poke
+        ref = np.linalg.solve(m.matrix.toarray(), rhs)
+        # diagonally dominant (cond < 10): both LUs agree with dense to a few eps
+        assert np.max(np.abs(m.solve(rhs) - ref)) <= 100 * EPS * np.max(np.abs(ref))
 
 
 def test_band_and_superlu_give_the_same_solution_of_a_dae():

@@ -42,6 +42,7 @@ def solve_dae(
     yp0=None,
     *,
     algebraic=None,
+    quadrature=None,
     rtol: float = 1e-6,
     atol=1e-8,
     max_order: int = 4,
@@ -75,6 +76,13 @@ def solve_dae(
     y0, yp0 : initial values; yp0 defaults to zeros.
     algebraic : indices or boolean mask of the components whose derivative
         appears nowhere. None: found by probing dF/dy'.
+    quadrature : indices or boolean mask of quadrature components (None: none):
+        y_i' = f_i(t, other y, y') set by one equation, y_i read by no equation
+        (a running integral such as the mass that has passed a boundary). As
+        SUNDIALS IDA's quadratures with errconQ = false they are left out of the
+        error test and the Newton convergence norm (not the initial step's); they
+        are still integrated by the same BDF formula (in the Newton system, so a
+        linear invariant tying them to the states holds to round-off).
     rtol, atol : error tolerances; weights 1 / (rtol |y_i| + atol_i); atol
         scalar or per component, > 0.
     max_order : highest BDF order, 1..5 (default 4, as the seed argues).
@@ -133,6 +141,7 @@ def solve_dae(
         y0,
         yp0,
         algebraic,
+        quadrature,
         rtol,
         atol,
         max_order,
@@ -206,6 +215,10 @@ def solve_dae(
         error_mask = np.ones(problem.n)
         if exclude_algebraic_from_error:
             error_mask[algebraic_mask] = 0.0
+        norm_mask = np.ones(problem.n)  # Newton's convergence norm
+        if problem.quadrature is not None:
+            error_mask[problem.quadrature] = 0.0
+            norm_mask[problem.quadrature] = 0.0
         span = t_end - t0
         ic_scale = h0 if h0 is not None else min(1e-3 * span, max_step)
 
@@ -240,6 +253,7 @@ def solve_dae(
             h0=h0,
             max_step=max_step,
             error_mask=error_mask,
+            norm_mask=norm_mask,
             matrix=matrix,
             stats=stats,
             t_scale=span,
@@ -620,6 +634,7 @@ class _Problem:
         y0,
         yp0,
         algebraic,
+        quadrature,
         rtol,
         atol,
         max_order,
@@ -662,21 +677,8 @@ class _Problem:
             raise DAEError(f"h0 must be a positive number; got {h0!r}.")
         if not (_is_real(max_step) and max_step > 0):
             raise DAEError(f"max_step must be positive; got {max_step!r}.")
-        p.algebraic = None
-        if algebraic is not None:
-            arr = np.asarray(algebraic)
-            mask = np.zeros(n, dtype=bool)
-            if arr.dtype == bool:
-                if arr.shape != (n,):
-                    raise DAEError(f"algebraic as a mask must have {n} entries; got {arr.shape}.")
-                mask = arr.copy()
-            elif arr.size:
-                if not np.issubdtype(arr.dtype, np.integer) or arr.min() < -n or arr.max() >= n:
-                    raise DAEError(
-                        f"algebraic must hold indices in 0..{n - 1} or a boolean mask; got {arr!r}."
-                    )
-                mask[arr] = True
-            p.algebraic = mask
+        p.algebraic = _mask(algebraic, n, "algebraic")
+        p.quadrature = _mask(quadrature, n, "quadrature")
         p.sparsity = sparsity
         if sparsity is not None and getattr(sparsity, "shape", None) != (n, n):
             raise DAEError(
@@ -703,6 +705,25 @@ class _Problem:
         for i, g in enumerate(events):
             SwitchFunction.wrap(g, i)
         return p
+
+
+def _mask(v, n, what) -> np.ndarray | None:
+    """A boolean mask of n entries from indices or a mask (None stays None)."""
+    if v is None:
+        return None
+    arr = np.asarray(v)
+    mask = np.zeros(n, dtype=bool)
+    if arr.dtype == bool:
+        if arr.shape != (n,):
+            raise DAEError(f"{what} as a mask must have {n} entries; got {arr.shape}.")
+        return arr.copy()
+    if arr.size:
+        if not np.issubdtype(arr.dtype, np.integer) or arr.min() < -n or arr.max() >= n:
+            raise DAEError(
+                f"{what} must hold indices in 0..{n - 1} or a boolean mask; got {arr!r}."
+            )
+        mask[arr] = True
+    return mask
 
 
 def _is_real(v) -> bool:

@@ -121,6 +121,16 @@ class IterationMatrix:
             pattern.sort_indices()
             self.pattern = pattern
             self.band = BandOrdering.of(pattern)
+            if self.band is None or not self.band.worthwhile:
+                # the ordering from the entries that can be non-zero: the added
+                # diagonal's stored zeros can widen the band (band.BandOrdering.of; the
+                # steam pipe: kl, ku = 158, 157 -> 11, 15). Only then: on the air pipe
+                # reversal (tests/test_plant_reverse_flow.py) the other LU's round-off
+                # took the run into a Newton failure at 110 s (issue 7's reverse flow)
+                structural = scipy.sparse.csc_matrix(sparsity, dtype=float, copy=True)
+                structural.data[:] = 1.0
+                structural.eliminate_zeros()
+                self.band = BandOrdering.of(pattern, structural) or self.band
             if self.band is not None and not self.band.worthwhile:
                 self.band = None
             self.groups = colour_columns(pattern)
@@ -215,7 +225,7 @@ class IterationMatrix:
                 "The iteration matrix dF/dy + cj*dF/dy' has non-finite entries"
                 + self._describe_nonfinite()
             )
-        if self.sparse and self._banded():
+        if self.sparse and self._banded() and self._zero_outside_band():
             self._lu = BandLU(self.band, self.matrix.data)
             diag_u = self._lu.diagonal_u()
         elif self.sparse:
@@ -231,6 +241,11 @@ class IterationMatrix:
             diag_u = np.diag(self._lu[0])
         if np.any(diag_u == 0.0) or not np.all(np.isfinite(diag_u)):
             raise SingularMatrixError(self._describe_singular("a zero pivot in LU"))
+
+    def _zero_outside_band(self) -> bool:
+        """The stored entries the band leaves out (the added diagonal's) are zero."""
+        out = self.band.outside
+        return out is None or not np.any(self.matrix.data[out])
 
     def _banded(self) -> bool:
         """The current matrix is stored on the pattern whose band ordering is kept."""
