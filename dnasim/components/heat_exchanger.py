@@ -7,7 +7,12 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
-from dnasim.components.physics import M_REG_REL, has_phase_branches, is_condensable
+from dnasim.components.physics import (
+    DT_Q_NOMINAL,
+    M_REG_REL,
+    has_phase_branches,
+    is_condensable,
+)
 from dnasim.errors import PlantError
 
 
@@ -252,7 +257,11 @@ class HeatExchanger(Component):
         for side, ch in self.channels.items():
             M_nom = self.params[f"{side}_V"] / self.n * 1e-3
             out += ch.variables(
-                M_nom, M_nom * 1e3, 1e5, 1e5, max(self.params[f"{side}_kA"] / self.n * 10, 1.0)
+                M_nom,
+                M_nom * 1e3,
+                1e5,
+                1e5,
+                max(self.params[f"{side}_kA"] / self.n * DT_Q_NOMINAL, 1.0),
             )
         return out + [Variable("T_w", "K", 300.0, self.n, "wall temperature of section i")]
 

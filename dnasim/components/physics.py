@@ -168,6 +168,15 @@ def _logmean_positive(x, y):
 #: k m|m|/rho by (m_reg/m)^2/2 = 5e-5.
 M_REG_REL = 1e-2
 
+#: temperature scale [K] of a wall heat flow's nominal value Q_nom = (kA/n) DT_Q_NOMINAL
+#: (pipes, heat exchangers), from which its atol = atol_scaled Q_nom. The fluid's
+#: own states resolve its temperature to about rtol u / c_p ~ rtol x 1000 K (u ~ c_p T
+#: from the IF97 reference state), so Q = kA (T - T_w) is resolved alike with a
+#: 1000 K scale. The former 10 K asked T - T_w to 1e-5 K at rtol 1e-6, 100 times
+#: tighter: the 1000-volume steam pipe with its algebraic variables in the error test
+#: took 12927 steps, 489 with this scale (benchmarks/README.md).
+DT_Q_NOMINAL = 1000.0
+
 
 def friction_dp(k, m, rho, m_reg):
     """Friction pressure drop k m sqrt(m^2 + m_reg^2) / rho [Pa].

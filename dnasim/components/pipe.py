@@ -7,7 +7,12 @@ import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
 from dnasim.components.channel import Channel
-from dnasim.components.physics import M_REG_REL, has_phase_branches, is_condensable
+from dnasim.components.physics import (
+    DT_Q_NOMINAL,
+    M_REG_REL,
+    has_phase_branches,
+    is_condensable,
+)
 from dnasim.errors import PlantError
 
 
@@ -275,7 +280,7 @@ class Pipe(Component):
         # M and U scales are raised to |initial value| by the assembly
         M_nom = P["V"] / self.n * 1e-3
         U_nom = M_nom * 1e3
-        Q_nom = max(P["kA"] / self.n * 10.0, 1.0)
+        Q_nom = max(P["kA"] / self.n * DT_Q_NOMINAL, 1.0)
         out = self.channel.variables(M_nom, U_nom, 1e5, 1e5, Q_nom) + [
             Variable("T_w", "K", 300.0, self.n, "wall temperature of volume i"),
         ]

@@ -254,6 +254,7 @@ def solve_dae(
             max_step=max_step,
             error_mask=error_mask,
             norm_mask=norm_mask,
+            algebraic=algebraic_mask,
             matrix=matrix,
             stats=stats,
             t_scale=span,

@@ -136,6 +136,8 @@ class NordsieckBDF:
     error_mask : 1 for the components counted in the error test, 0 for excluded ones
     norm_mask : 1 for the components counted in the Newton convergence norm, 0 for
         quadratures (None: all counted)
+    algebraic : mask of the algebraic components (None: not known); a corrector retry
+        starts them at their last accepted values (``_correct``)
     matrix : IterationMatrix
     fixed_order, fixed_step : for order-verification tests only: keep q and h constant
     """
@@ -161,6 +163,7 @@ class NordsieckBDF:
         fixed_order: bool = False,
         fixed_step: bool = False,
         norm_mask: np.ndarray | None = None,
+        algebraic: np.ndarray | None = None,
     ):
         self.residual = residual
         self.n = y0.size
@@ -170,6 +173,7 @@ class NordsieckBDF:
         self.max_step = max_step
         self.error_mask = error_mask
         self.norm_mask = np.ones(self.n) if norm_mask is None else norm_mask
+        self.algebraic = None if algebraic is None else np.asarray(algebraic, dtype=bool)
         self.matrix = matrix
         self.stats = stats
         self.t_scale = t_scale
@@ -186,25 +190,24 @@ class NordsieckBDF:
         self.predicted_crossing = None
         # reinitialize(t, y, yp, h) -> consistent (y, yp) at t (set by the driver)
         self.reinitialize = None
-        self.first_start = True  # the start's step leaves the quadratures out (below)
         self.restart(t0, y0, yp0, h0)
-        self.first_start = False
 
     # -- starting and restarting -----------------------------------------------------------
     def initial_step(self, y, yp) -> float:
         """IDA's choice: 0.001 of the span, and no more than 0.5 / ||y'||.
 
-        At the start the quadratures are not counted (their y' with their atol, a
-        nominal value, gave h0 = 1.6e-13 s on tests/field/closed_form_water.toml, where
-        a liquid volume's Newton cannot converge); after a tstop or switch they are
-        (their atol is atol_scaled times their nominal value): without them the first
-        step after the valve closure of
-        tests/test_plant_defaults.py (5 volumes) was long enough that the terminal
-        reverse-flow switch was located on the interpolant of a flow near zero and
-        stopped the run at 10.54 s (the restart_step note on algebraic switches)."""
+        The quadratures are not counted, at the start nor after a tstop or switch (as
+        IDA's with errconQ = false: they take part in no step-size decision). Their
+        y' with their atol (atol_scaled times a nominal value) gave h0 = 1.6e-13 s on
+        tests/field/closed_form_water.toml, where a liquid volume's Newton cannot
+        converge; after the inlet step of tests/field/hx_inlet_step.toml and of
+        tests/plants/lag_sensor.toml they set the restart step (7.8e-6 s on the
+        lag sensor, where its state allowed ~0.1 s), the step sequence after it
+        and with it the final errors: the hx's steady heat balance 1.3e-6 against
+        6e-8 without them, the lag's reading 2.6e-3 K against 7.9e-4 K from the
+        closed form (measured)."""
         h = 1.0e-3 * self.t_scale
-        mask = self.norm_mask if self.first_start else 1.0
-        ypnorm = self.norm(yp, self.weights_for(y) * mask)
+        ypnorm = self.norm(yp, self.weights_for(y) * self.norm_mask)
         if ypnorm * h > 0.5:
             h = 0.5 / ypnorm
         # Not below a few hundred ulp of t: a restart at a large t with a fast-growing
@@ -441,12 +444,18 @@ class NordsieckBDF:
         predictor misses by far on a curved constraint: the flow between a liquid and a
         boiling volume, fixed by pressures that move by 1e9 Pa per kg of the volumes'
         masses, was predicted 3 kg/s off on tests/field/boiling_10bar.toml, and modified
-        Newton needed more than 4 iterations where full Newton needed 5 (measured)."""
+        Newton needed more than 4 iterations where full Newton needed 5 (measured).
+
+        The retries (the fresh matrix, full Newton) start the algebraic unknowns at
+        their last accepted values, not at the predictor's extrapolation
+        (``_retry_start``)."""
         y_pred = z_pred[0]
         yp_pred = z_pred[1] / h
         for attempt in range(2):
             y = y_pred.copy()
             yp = yp_pred.copy()
+            if attempt == 1:
+                self._retry_start(y, yp, cj)
             try:
                 f = self.residual(t, y, yp)
                 if not all_finite(f):
@@ -478,10 +487,32 @@ class NordsieckBDF:
             # Slow or failed with an old matrix: retry once with a fresh one.
         return False, None, None, None
 
+    def _retry_start(self, y, yp, cj) -> None:
+        """Start a corrector retry with the algebraic unknowns at their last accepted
+        values (in place; y' moved with them along the BDF formula y' = y'_pred + cj
+        (y - y_pred)).
+
+        Their Nordsieck history is not error-controlled (outside the error test of
+        plants) and carries the Newton and truncation noise of the states they follow
+        with a large gain: an economiser's liquid flows, fixed by volume pressures that
+        move 1.6e9 Pa per unit relative mass, were extrapolated at order 4 to -84 kg/s
+        where the corrector's flow was 7.7 kg/s (plants/rankine.toml, t = 2 ms), and
+        with dp = c m |m| full Newton from there halves m per iteration and fails.
+        The last accepted value was 15 kg/s. Any start is valid: an algebraic y_i
+        enters F only through y_i. plants/rankine.toml at rtol 0.95e-6 to 1.05e-6
+        (11 values, first 100 steps): 3 runs crawled at h ~ 1e-5 s below t = 5 ms
+        from the predictor, none with this start (measured)."""
+        a = self.algebraic
+        if a is None:
+            return
+        yp[a] += cj * (self.y[a] - y[a])
+        y[a] = self.y[a]
+
     def _full_newton_from(self, t, y_pred, yp_pred, cj, h, weights, newton_weights):
         """``_full_newton`` from the predictor: (converged, y, yp, Delta)."""
         try:
             y, yp = y_pred.copy(), yp_pred.copy()
+            self._retry_start(y, yp, cj)
             f = self.residual(t, y, yp)
             converged, y, yp = self._full_newton(t, y, yp, f, cj, h, weights, newton_weights)
         except ResidualDomainError as exc:

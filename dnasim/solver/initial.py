@@ -313,7 +313,7 @@ def _newton(
             jac = None
             continue
         if lam < LAMBDA_MIN:
-            if phi <= WITHIN_TOLERANCE or np.max(scaled, initial=0.0) <= ROUNDOFF_RESIDUAL:
+            if _within_tolerance(phi, scaled):
                 # Within the integrator's tolerance and no descent left: round-off.
                 y, yp = _update(y, yp, d, 1.0, ymask, ypmask)
                 return True, y, yp, f, scaled, uw, ""
@@ -321,19 +321,29 @@ def _newton(
         y, yp, f = y_new, yp_new, f_new
         short_steps += lam < LAMBDA_SHORT
         if merit == "natural" and short_steps >= SHORT_STEPS_MAX:
+            if _within_tolerance(phi, scaled):
+                # short steps at round-off (the residuals already far below the
+                # tolerance), not a wandering merit: accepted as at the end
+                return True, y, yp, f, scaled, uw, ""
             return False, y, yp, f, scaled, uw, "the line search stalled (short steps)"
         if lam < 1.0 or after > RATE_REFRESH * before:
             jac, d = None, None
         else:
             d = d_new if merit == "natural" else None
-    if phi <= WITHIN_TOLERANCE or (
-        scaled is not None and np.max(scaled, initial=0.0) <= ROUNDOFF_RESIDUAL
-    ):
+    if _within_tolerance(phi, scaled):
         # Newton creeps at the level of the property functions' round-off: the state
         # is consistent to within the integrator's tolerance, and its corrector
         # absorbs the rest.
         return True, y, yp, f, scaled, uw, ""
     return False, y, yp, f, scaled, uw, f"Newton did not converge in {max_iters} iterations"
+
+
+def _within_tolerance(phi, scaled) -> bool:
+    """A stalled Newton's iterate accepted (module doc): the step within the integrator's
+    tolerance, or every residual below ROUNDOFF_RESIDUAL of its unknown's tolerance."""
+    return phi <= WITHIN_TOLERANCE or (
+        scaled is not None and np.max(scaled, initial=0.0) <= ROUNDOFF_RESIDUAL
+    )
 
 
 def _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix):
