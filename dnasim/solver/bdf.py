@@ -136,8 +136,8 @@ class NordsieckBDF:
     error_mask : 1 for the components counted in the error test, 0 for excluded ones
     norm_mask : 1 for the components counted in the Newton convergence norm, 0 for
         quadratures (None: all counted)
-    algebraic : mask of the algebraic components (None: not known); a corrector retry
-        starts them at their last accepted values (``_correct``)
+    algebraic : mask of the algebraic components (None: not known); the corrector's
+        last attempt starts them at their last accepted values (``_last_chance``)
     matrix : IterationMatrix
     fixed_order, fixed_step : for order-verification tests only: keep q and h constant
     """
@@ -446,16 +446,20 @@ class NordsieckBDF:
         masses, was predicted 3 kg/s off on tests/field/boiling_10bar.toml, and modified
         Newton needed more than 4 iterations where full Newton needed 5 (measured).
 
-        The retries (the fresh matrix, full Newton) start the algebraic unknowns at
-        their last accepted values, not at the predictor's extrapolation
-        (``_retry_start``)."""
+        When all of these fail, one more attempt starts the algebraic unknowns at
+        their last accepted values instead of the predictor's (``_last_chance``)."""
         y_pred = z_pred[0]
         yp_pred = z_pred[1] / h
+        result = self._correct_from_predictor(t, y_pred, yp_pred, cj, h, weights, newton_weights)
+        if result[0] or self.algebraic is None or not self.algebraic.any():
+            return result
+        return self._last_chance(t, y_pred, yp_pred, cj, h, weights, newton_weights)
+
+    def _correct_from_predictor(self, t, y_pred, yp_pred, cj, h, weights, newton_weights):
+        """The attempts of ``_correct`` that start at the predictor."""
         for attempt in range(2):
             y = y_pred.copy()
             yp = yp_pred.copy()
-            if attempt == 1:
-                self._retry_start(y, yp, cj)
             try:
                 f = self.residual(t, y, yp)
                 if not all_finite(f):
@@ -481,16 +485,16 @@ class NordsieckBDF:
             if self.jacobian_current:
                 if self._slow_but_converging:
                     return self._full_newton_from(
-                        t, y_pred, yp_pred, cj, h, weights, newton_weights
+                        t, y_pred, yp_pred, y_pred, yp_pred, cj, h, weights, newton_weights
                     )
                 return False, None, None, None
             # Slow or failed with an old matrix: retry once with a fresh one.
         return False, None, None, None
 
-    def _retry_start(self, y, yp, cj) -> None:
-        """Start a corrector retry with the algebraic unknowns at their last accepted
-        values (in place; y' moved with them along the BDF formula y' = y'_pred + cj
-        (y - y_pred)).
+    def _last_chance(self, t, y_pred, yp_pred, cj, h, weights, newton_weights):
+        """The corrector from the predictor with the algebraic unknowns at their last
+        accepted values (y' moved with them along the BDF formula y' = y'_pred + cj
+        (y - y_pred)): a fresh matrix, and full Newton when that converges too slowly.
 
         Their Nordsieck history is not error-controlled (outside the error test of
         plants) and carries the Newton and truncation noise of the states they follow
@@ -499,20 +503,43 @@ class NordsieckBDF:
         where the corrector's flow was 7.7 kg/s (plants/rankine.toml, t = 2 ms), and
         with dp = c m |m| full Newton from there halves m per iteration and fails.
         The last accepted value was 15 kg/s. Any start is valid: an algebraic y_i
-        enters F only through y_i. plants/rankine.toml at rtol 0.95e-6 to 1.05e-6
-        (11 values, first 100 steps): 3 runs crawled at h ~ 1e-5 s below t = 5 ms
-        from the predictor, none with this start (measured)."""
+        enters F only through y_i. plants/rankine.toml at 11 values of rtol from 0.9e-6
+        to 1.1e-6, first 100 steps: without this attempt 3 runs crawled at h ~ 1e-5 s
+        below t = 5 ms (main too, at 0.98e-6); with it all reached 0.40 to 0.64 s
+        (measured). Only after the attempts
+        from the predictor failed: as the first retry (instead of the predictor's start
+        for the fresh matrix and full Newton) it took tests/field/boiling_10bar.toml
+        into a step-size collapse at 36.4 s, where the predictor carries the volumes
+        across the phase line and the last values lie on the other side (measured)."""
         a = self.algebraic
-        if a is None:
-            return
+        y, yp = y_pred.copy(), yp_pred.copy()
         yp[a] += cj * (self.y[a] - y[a])
         y[a] = self.y[a]
-
-    def _full_newton_from(self, t, y_pred, yp_pred, cj, h, weights, newton_weights):
-        """``_full_newton`` from the predictor: (converged, y, yp, Delta)."""
+        y_start, yp_start = y, yp
         try:
-            y, yp = y_pred.copy(), yp_pred.copy()
-            self._retry_start(y, yp, cj)
+            f = self.residual(t, y, yp)
+            if not all_finite(f):
+                self._note_nonfinite(t, f)
+                return False, None, None, None
+            self._new_matrix(t, y, yp, f, cj, h, weights)
+            converged, y, yp = self._newton(t, y, yp, f, cj, newton_weights, fresh=True)
+        except ResidualDomainError as exc:
+            self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
+            return False, None, None, None
+        if converged:
+            return True, y, yp, y - y_pred
+        if self._slow_but_converging:
+            return self._full_newton_from(
+                t, y_start, yp_start, y_pred, yp_pred, cj, h, weights, newton_weights
+            )
+        return False, None, None, None
+
+    def _full_newton_from(
+        self, t, y_start, yp_start, y_pred, yp_pred, cj, h, weights, newton_weights
+    ):
+        """``_full_newton`` from (y_start, yp_start): (converged, y, yp, Delta = y - y_pred)."""
+        try:
+            y, yp = y_start.copy(), yp_start.copy()
             f = self.residual(t, y, yp)
             converged, y, yp = self._full_newton(t, y, yp, f, cj, h, weights, newton_weights)
         except ResidualDomainError as exc:
