@@ -24,8 +24,9 @@ NOT_YET: dict[str, str] = {}
 #: collapsing steam draws condensate back through the outlet valve (the outlet node's
 #: enthalpy swinging between the tube's 1.2 MJ/kg and the header's 0.63 MJ/kg within the
 #: upwind regularisation, full Newton not converging). On merge10 it runs to the end and
-#: passes its checks; the likely cause, not isolated, is the corrector's last attempt from
-#: the algebraic unknowns' last accepted values (dnasim.solver.bdf ``_last_chance``).
+#: passes its checks owing to the corrector's last attempt from the algebraic unknowns'
+#: last accepted values (dnasim.solver.bdf ``_last_chance``): without that attempt the
+#: same branch stops at 55.2 s (a re-initialisation outside IF97's domain; measured).
 
 
 def _param(case):
