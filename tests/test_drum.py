@@ -321,3 +321,19 @@ def test_feedwater_heater_plant_heats_to_saturation_and_balances_close():
     assert np.min(level[(t > 300) & (t < 700)]) < 2.47
     assert np.max(level[t > 700]) > 2.5
     assert np.max(res["condensate.m"]) > 1.3 * res["condensate.m"][0]
+
+
+@pytest.mark.parametrize(
+    "v, mode",
+    [(-1.1e-44, "free"), (1.0 + 1e-15, "free"), (-1e-6, "low"), (1.0 + 1e-6, "high")],
+)
+def test_pi_start_mode_saturates_only_beyond_round_off(v, mode):
+    # drum_boiler.toml starts with e = 0 and v = m_p + m_I = z_min = 0; a start Newton
+    # that leaves v = -1.1e-44 must not choose "low" (its leave switch would start at 0
+    # and never cross: the feed stayed off). Round-off is 1e-12 of the output range.
+    from dnasim.components.base import LocalVector
+
+    pi = PIController("pi", Kp=0.02, KI=1e-4, setpoint=60.0, measured_nominal=60.0)
+    x = LocalVector(np.array([0.0, v]), {"m_p": 0, "m_I": 1}, {"mode": "free"})
+    pi.init_discrete_state(0.0, x, None)
+    assert x.modes["mode"] == mode
