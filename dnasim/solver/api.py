@@ -80,7 +80,8 @@ def solve_dae(
         y_i' = f_i(t, other y, y') set by one equation, y_i read by no equation
         (a running integral such as the mass that has passed a boundary). As
         SUNDIALS IDA's quadratures with errconQ = false they are left out of the
-        error test and the Newton convergence norm (not the initial step's); they
+        error test, the Newton convergence norm and the first step after the start,
+        a tstop or a switch (0.5/||y'||): they take part in no step-size decision; they
         are still integrated by the same BDF formula (in the Newton system, so a
         linear invariant tying them to the states holds to round-off).
     rtol, atol : error tolerances; weights 1 / (rtol |y_i| + atol_i); atol
