@@ -25,7 +25,7 @@ _spec.loader.exec_module(fuzz)
 BASES = fuzz.base_plants()
 #: plants only checked, never run, here (none now: rankine's 0.5 s run took ~50 s of CPU
 #: while the accumulators' tolerances scaled with the run length; as quadratures out of
-#: the error test it takes 105 steps and ~8.5 s of CPU on a loaded machine, start-up
+#: the error test it takes 98 steps and ~6 s of CPU on a loaded machine, start-up
 #: included; its fuzzed variants are bounded by classify's 60 s alarm)
 CHECK_ONLY: set[str] = set()
 

@@ -504,7 +504,7 @@ class NordsieckBDF:
         with dp = c m |m| full Newton from there halves m per iteration and fails.
         The last accepted value was 15 kg/s. Any start is valid: an algebraic y_i
         enters F only through y_i. plants/rankine.toml at 11 values of rtol from 0.9e-6
-        to 1.1e-6, first 100 steps: without this attempt 3 runs crawled at h ~ 1e-5 s
+        to 1.1e-6, first 100 steps: without this attempt 6 runs crawled at h ~ 1e-5 s
         below t = 5 ms (main too, at 0.98e-6); with it all reached 0.40 to 0.64 s
         (measured). Only after the attempts
         from the predictor failed: as the first retry (instead of the predictor's start
