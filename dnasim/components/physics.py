@@ -50,7 +50,9 @@ class PropertyArrays:
     Only the points whose (p, h) changed since the previous call are sent to the
     medium, in one ``medium.states`` call. A finite-difference Jacobian perturbs a
     few points at a time, so for a long pipe this saves most property evaluations;
-    a Newton iteration changes every point and costs one array call.
+    a Newton iteration changes every point and costs one array call. A medium with
+    ``states_memo`` (IF97 water, compiled) does this bookkeeping itself, in its
+    compiled loop, and also starts each moved point from its previous state.
     """
 
     def __init__(self):
@@ -59,14 +61,22 @@ class PropertyArrays:
         self.branch = None
         self.out = None
         self.medium = None
+        self.memo = None
 
     def __call__(self, medium, p, h, branch=None):
         """As ``properties``; ``branch`` (int array or None) is part of each point's key."""
+        if self.medium is not medium:
+            self.medium = medium
+            self.p = None
+            new_memo = getattr(medium, "states_memo", None)
+            self.memo = new_memo() if new_memo is not None else None
+        if self.memo is not None:
+            r = medium.states(p, h, branch=branch, memo=self.memo)
+            return r.T, r.rho, r.u
         p = np.asarray(p, dtype=float)
         h = np.asarray(h, dtype=float)
         b = np.zeros(p.shape, dtype=np.int64) if branch is None else np.asarray(branch)
-        if self.p is None or self.p.shape != p.shape or self.medium is not medium:
-            self.medium = medium
+        if self.p is None or self.p.shape != p.shape:
             T, rho, u = properties(medium, p, h, b)
         else:
             changed = np.flatnonzero((p != self.p) | (h != self.h) | (b != self.branch))
