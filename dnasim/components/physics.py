@@ -127,6 +127,25 @@ def logarithmic_mean(x, y):
     return out
 
 
+#: arrays at least this long go to the compiled ``lmtd`` (``lmtd_numba``); shorter ones
+#: stay in numpy, so a small plant does not import numba for it
+LMTD_NUMBA_MIN = 64
+
+
+def _lmtd_compiled():
+    """``lmtd_numba.lmtd``, imported on first use; None when numba is missing."""
+    if _lmtd_compiled.fn is False:
+        try:
+            from dnasim.components.lmtd_numba import lmtd as fn
+        except ImportError:  # pragma: no cover - numba is a dependency
+            fn = None
+        _lmtd_compiled.fn = fn
+    return _lmtd_compiled.fn
+
+
+_lmtd_compiled.fn = False
+
+
 def lmtd(dT_a, dT_b, dT_reg):
     """Regularised, signed log-mean temperature difference [K].
 
@@ -143,7 +162,20 @@ def lmtd(dT_a, dT_b, dT_reg):
     heat flow ODE is not Lipschitz and Newton fails. With width dT_reg the slope
     is bounded by about a / (dT_reg ln^2(a/dT_reg)); for |dT| >~ 10 dT_reg the
     value is the exact LMTD to 1e-4 relative.
+
+    Arrays of ``LMTD_NUMBA_MIN`` elements or more (long channels) are computed by the
+    compiled loop of ``dnasim.components.lmtd_numba`` (the same operations; equal to
+    round-off; at 1000 elements 2.7 times faster with every |dT| < 40 dT_reg, more
+    beyond).
     """
+    if (
+        isinstance(dT_a, np.ndarray)
+        and isinstance(dT_b, np.ndarray)
+        and dT_a.shape == dT_b.shape
+        and dT_a.size >= LMTD_NUMBA_MIN
+        and _lmtd_compiled() is not None
+    ):
+        return _lmtd_compiled()(dT_a, dT_b, dT_reg)
     a_pos = softplus(dT_a, dT_reg)
     b_pos = softplus(dT_b, dT_reg)
     a_neg = softplus(-np.asarray(dT_a, dtype=float), dT_reg)
