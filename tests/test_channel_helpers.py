@@ -1,5 +1,7 @@
-"""The compiled LMTD of long channels (dnasim.components.lmtd_numba) against the numpy
-``physics.lmtd`` it replaces for arrays of ``LMTD_NUMBA_MIN`` or more elements.
+"""The channel's fast helpers against the formulas they replace: the compiled LMTD of
+long channels (dnasim.components.lmtd_numba) against the numpy ``physics.lmtd`` (used
+below ``LMTD_NUMBA_MIN`` elements), and ``physics.upwind_weight_pair`` against two
+calls of ``upwind_weight``.
 
 The reference is the numpy formula (softplus of +-dT and the logarithmic mean, itself
 checked against the closed-form LMTD in tests/test_walls.py and the plant tests): the
@@ -50,3 +52,16 @@ def test_long_arrays_use_the_compiled_loop(monkeypatch):
     assert len(calls) == 1
     physics.lmtd(np.ones(n - 1), np.ones(n - 1), 1.0)  # numpy below the threshold
     assert len(calls) == 1
+
+
+def test_upwind_weight_pair_is_two_calls_bit_for_bit():
+    """(w(m), w(-m)) from one pass: q and the tail are even in m and (-m) + q == q - m
+    in IEEE arithmetic, so the pair equals the two calls exactly, inside and outside the
+    regularisation band and at m = 0."""
+    rng = np.random.default_rng(5)
+    m = np.concatenate([rng.standard_normal(2000) * s for s in (1e-6, 1e-3, 1e-2, 1.0, 100.0)])
+    m[::17] = 0.0
+    for eps in (1e-3, 2e-2, 0.7):
+        wp, wm = physics.upwind_weight_pair(m, eps)
+        np.testing.assert_array_equal(wp, physics.upwind_weight(m, eps))
+        np.testing.assert_array_equal(wm, physics.upwind_weight(-m, eps))
