@@ -606,3 +606,28 @@ def test_memo_copies_unchanged_points_and_warm_starts_moved_ones():
             scale = np.abs(x[fin]).max()
             err = np.abs(x[fin] - y[fin])
             assert np.all(err <= tols.get(f, 5e-10) * np.abs(x[fin]) + 1e-12 * scale), (rel, f)
+
+
+def test_memo_reproduces_a_point_moved_and_moved_back():
+    """A difference quotient evaluates F(y), F(y + d e_j), F(y + d e_k), ...: a point
+    moved by one column (its p) and the next (its h) and back at the third must give
+    F(y)'s state to the bit (a
+    warm-started recomputation differs by round-off, which (F - F(y))/d would turn
+    into an error of 1e-13 |F| / d in an entry that should be zero)."""
+    P = np.array([1e5, 5e6, 5e6, 12e6, 25e6])
+    H = np.array([2.0e5, 3.4e6, 1.0e6, 3.2e6, 1.8e6])
+    m = NB.PhMemo()
+    base = NB.ph_arrays(P, H, memo=m)
+    for j in range(P.size):
+        # column "p of point j", then column "h of point j", then a column elsewhere
+        Pj = P.copy()
+        Pj[j] *= 1.0 + 1.5e-8
+        Hj = H.copy()
+        Hj[j] *= 1.0 + 1.5e-8
+        for p_col, h_col in ((Pj, H), (P, Hj)):
+            moved = NB.ph_arrays(p_col, h_col, memo=m)
+            assert m.computed == 1 and moved.rho[j] != base.rho[j]
+        back = NB.ph_arrays(P, H, memo=m)
+        assert m.computed == 0
+        for f in ("T", "rho", "u", "s", "cp", "drho_dp_h", "drho_dh_p", "region", "status"):
+            np.testing.assert_array_equal(getattr(back, f), getattr(base, f))

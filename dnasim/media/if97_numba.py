@@ -747,51 +747,91 @@ def _ph_branch_loop(p, h, branch, T, rho, u, s, cp, x, dp, dh, region, status):
         _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status)
 
 
+#: states remembered per point by :class:`PhMemo`: the base state and the two states a
+#: difference quotient makes by moving p and h of the point in consecutive columns
+MEMO_SLOTS = 3
+
+
 @_njit
-def _ph_memo_loop(p, h, branch, memo, out):
-    """As _ph_branch_loop, remembering each point's last state in memo (arrays of
-    :class:`PhMemo`); returns how many points were computed. A point whose (p, h, branch)
-    equals the remembered one is copied; a single-phase point of region 1 or 2 is
-    started from the remembered state's temperature moved to first order,
-    T_w = T' + (h - h')/cp' + (dT/dp)_h' (p - p'), instead of the backward equations."""
-    mp, mh, mb, mTp = memo[0], memo[1], memo[2], memo[3]
-    mT, mrho, mu, ms, mcp, mx, mdp, mdh, mreg, mst = out[0]
-    T, rho, u, s, cp, x, dp, dh, region, status = out[1]
+def _ph_memo_loop(p, h, branch, order, F, B, RS, T, rho, u, s, cp, x, dp, dh, region, status):
+    """As _ph_branch_loop, remembering each point's last MEMO_SLOTS states in the memo
+    arrays of :class:`PhMemo` (order[:, i]: its slots from the most to the least recently
+    used); returns how many points were computed.
+
+    A point whose (p, h, branch) equals a remembered one is copied from it; otherwise a
+    single-phase point of region 1 or 2 starts its T iteration from the most recent
+    state moved to first order, T_w = T' + (h - h')/cp' + (dT/dp)_h' (p - p'), instead
+    of the backward equations, and the result replaces the least recently used slot."""
+    n_slots = order.shape[0]
     computed = 0
     for i in range(p.size):
         pi = p[i]
         hi = h[i]
         bi = branch[i]
-        if pi == mp[i] and hi == mh[i] and bi == mb[i]:
-            r = (mT[i], mrho[i], mu[i], ms[i], mcp[i], mx[i], mdp[i], mdh[i], mreg[i], mst[i])
+        rank = -1
+        for r in range(n_slots):
+            k = order[r, i]
+            if pi == F[k, 0, i] and hi == F[k, 1, i] and bi == B[k, i]:
+                rank = r
+                break
+        if rank >= 0:
+            T[i] = F[k, 3, i]
+            rho[i] = F[k, 4, i]
+            u[i] = F[k, 5, i]
+            s[i] = F[k, 6, i]
+            cp[i] = F[k, 7, i]
+            x[i] = F[k, 8, i]
+            dp[i] = F[k, 9, i]
+            dh[i] = F[k, 10, i]
+            region[i] = RS[k, 0, i]
+            status[i] = RS[k, 1, i]
+        else:
+            a = order[0, i]
+            Tw = math.nan
+            if RS[a, 1, i] == 0 and bi == B[a, i] and (RS[a, 0, i] == 1 or RS[a, 0, i] == 2):
+                Tw = F[a, 3, i] + (hi - F[a, 1, i]) / F[a, 7, i] + F[a, 2, i] * (pi - F[a, 0, i])
+                # near the limits of the range the backward equations decide (status 4, 5)
+                if not (T_MIN + 2.0 < Tw < T_25 - 3.0):
+                    Tw = math.nan
+            r, Tp = _ph_branch(pi, hi, bi, Tw)
+            computed += 1
             _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status)
-            continue
-        Tw = math.nan
-        if mst[i] == 0 and bi == mb[i] and (mreg[i] == 1 or mreg[i] == 2):
-            Tw = mT[i] + (hi - mh[i]) / mcp[i] + mTp[i] * (pi - mp[i])
-            # near the limits of the range the backward equations decide (status 4, 5)
-            if not (T_MIN + 2.0 < Tw < T_25 - 3.0):
-                Tw = math.nan
-        r, Tp = _ph_branch(pi, hi, bi, Tw)
-        computed += 1
-        _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status)
-        _store(r, i, mT, mrho, mu, ms, mcp, mx, mdp, mdh, mreg, mst)
-        mp[i] = pi
-        mh[i] = hi
-        mb[i] = bi
-        mTp[i] = Tp
+            rank = n_slots - 1
+            k = order[rank, i]
+            F[k, 0, i] = pi
+            F[k, 1, i] = hi
+            F[k, 2, i] = Tp
+            F[k, 3, i] = r[0]
+            F[k, 4, i] = r[1]
+            F[k, 5, i] = r[2]
+            F[k, 6, i] = r[3]
+            F[k, 7, i] = r[4]
+            F[k, 8, i] = r[5]
+            F[k, 9, i] = r[6]
+            F[k, 10, i] = r[7]
+            B[k, i] = bi
+            RS[k, 0, i] = r[8]
+            RS[k, 1, i] = r[9]
+        for r in range(rank, 0, -1):  # slot k becomes the most recently used
+            order[r, i] = order[r - 1, i]
+        order[0, i] = k
     return computed
 
 
 class PhMemo:
-    """The last state of each of a fixed set of points, for :func:`ph_arrays` (``memo=``).
+    """The last MEMO_SLOTS states of each of a fixed set of points, for
+    :func:`ph_arrays` (``memo=``).
 
     A finite-difference Jacobian moves a few points per residual and a Newton iteration
     moves every point by little: with a memo, unchanged points are copied and moved
     single-phase points start their temperature iteration from the remembered state
-    (two evaluations of the Gibbs function instead of the backward equation and three).
-    Results agree with a call without memo to round-off (the iteration stops at the
-    same tolerance). ``computed``: the points computed by the last call.
+    (one or two evaluations of the Gibbs function instead of the backward equation and
+    three). A warm-started result agrees with a call without memo to round-off (the
+    iteration stops at the same tolerance), not to the bit, so several states are kept:
+    a point moved by difference quotients (its p in one column, its h in the next) and
+    moved back is copied, and F(y) is reproduced exactly (a difference quotient
+    (F - F(y))/d would turn the round-off into errors of 1e-13 |F| / d in entries that
+    should be zero). ``computed``: the points computed by the last call.
     """
 
     def __init__(self):
@@ -799,16 +839,17 @@ class PhMemo:
         self.computed = 0
 
     def arrays(self, n):
-        """(inputs, previous outputs) arrays for n points, reset when n changes."""
+        """The memo arrays (order, floats, branches, region and status) for n points,
+        reset when n changes: floats[slot] holds p, h, (dT/dp)_h, then T, rho, u, s,
+        cp, x, drho_dp_h, drho_dh_p."""
         if n != self.n:
             self.n = n
-            nan = np.full(n, np.nan)
-            self.inputs = (nan.copy(), nan.copy(), np.full(n, -1, dtype=np.int64), nan.copy())
-            self.outputs = tuple(np.full(n, np.nan) for _ in range(8)) + (
-                np.zeros(n, dtype=np.int8),
-                np.ones(n, dtype=np.int8),
-            )
-        return self.inputs, self.outputs
+            k = MEMO_SLOTS
+            self.order = np.repeat(np.arange(k, dtype=np.int64)[:, None], n, axis=1)
+            self.floats = np.full((k, 11, n), np.nan)
+            self.branches = np.full((k, n), -1, dtype=np.int64)
+            self.region_status = np.ones((k, 2, n), dtype=np.int8)
+        return self.order, self.floats, self.branches, self.region_status
 
 
 def ph_arrays(p, h, branch=None, memo=None) -> K.PhResult:
@@ -834,8 +875,7 @@ def ph_arrays(p, h, branch=None, memo=None) -> K.PhResult:
     if memo is not None:
         bf = np.zeros(n, dtype=np.int64) if branch is None else branch
         bf = np.ascontiguousarray(np.broadcast_to(np.asarray(bf, dtype=np.int64), shape).ravel())
-        inputs, previous = memo.arrays(n)
-        memo.computed = _ph_memo_loop(pf, hf, bf, inputs, (previous, out))
+        memo.computed = _ph_memo_loop(pf, hf, bf, *memo.arrays(n), *out)
     elif branch is None:
         _ph_loop(pf, hf, *out)
     else:
