@@ -7,6 +7,9 @@ state of
 
 - ``numpy``: :func:`dnasim.media.if97_kernel.ph` on arrays of n states (one call);
 - ``numba``: :func:`dnasim.media.if97_numba.ph_arrays` (one call, compiled loop);
+- ``memo``: the same with a :class:`~dnasim.media.if97_numba.PhMemo` (what a pipe's
+  property call uses), every state moved by a relative 1e-7 in p and h from the
+  previous call (a Newton iteration): warm-started from the remembered state;
 - ``numba 1x1``: n calls of the scalar ``IF97Water.state(p, h)`` (cache missed: each
   h is new), the path the components use today;
 - ``old``: n calls of ``state(p, h)`` of the IF97 medium of commit ea86a1d (CoolProp's
@@ -126,6 +129,14 @@ def main() -> None:
                 for _ in range(reps):
                     NB.ph_arrays(p, h)
 
+            memo = NB.PhMemo()
+            moved = [(p * (1.0 + s), h * (1.0 + s)) for s in (1e-7, -1e-7)]
+            NB.ph_arrays(p, h, memo=memo)
+
+            def run_memo():
+                for k in range(reps):
+                    NB.ph_arrays(*moved[k % 2], memo=memo)
+
             def run_scalar(medium):
                 def f():
                     for _ in range(reps):
@@ -138,6 +149,7 @@ def main() -> None:
             per = 1e6 / (reps * n)
             numpy_us = best(run_numpy) * per if n <= 1000 or name == "plant mix" else np.nan
             numba_us = best(run_numba) * per
+            memo_us = best(run_memo) * per
             scal_us = best(run_scalar(water)) * per
             old_us = np.nan
             if old is not None and n <= 1000:
@@ -145,17 +157,20 @@ def main() -> None:
                     old_us = best(run_scalar(old), repeats=2) * per
                 except Exception:  # noqa: BLE001 - the old flash fails in region 3 above p_c
                     old_us = np.nan
-            rows.append((name, n, numpy_us, numba_us, scal_us, old_us))
+            rows.append((name, n, numpy_us, numba_us, memo_us, scal_us, old_us))
 
     print(f"dnasim.media IF97 speed; Python {platform.python_version()}, {platform.machine()}")
     print("CPU us per state (best of 3); old = ea86a1d's CoolProp IF97 + Newton, one state")
     print("per call; nan: not run (numpy above 1000 single-state batches: slow; old above")
     print("1000: slow) or failing (the old CoolProp flash fails in region 3 above p_c)")
-    head = f"{'states':12s}{'n':>7s}{'numpy':>10s}{'numba':>10s}{'numba 1x1':>11s}{'old':>10s}"
+    head = (
+        f"{'states':12s}{'n':>7s}{'numpy':>10s}{'numba':>10s}{'memo':>10s}{'numba 1x1':>11s}"
+        f"{'old':>10s}"
+    )
     print(head)
     print("-" * len(head))
-    for name, n, a, b, c, d in rows:
-        print(f"{name:12s}{n:7d}{a:10.2f}{b:10.2f}{c:11.2f}{d:10.2f}")
+    for name, n, a, b, m, c, d in rows:
+        print(f"{name:12s}{n:7d}{a:10.2f}{b:10.2f}{m:10.2f}{c:11.2f}{d:10.2f}")
     print()
     print(f"one-off CPU s: import kernels {t_import:.2f}, first compiled call {t_first:.2f}")
     print("(numba's cache in __pycache__; without it the first call compiles), old medium load")

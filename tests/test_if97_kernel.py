@@ -570,3 +570,64 @@ def test_water_does_not_import_coolprop():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_memo_copies_unchanged_points_and_warm_starts_moved_ones():
+    """ph_arrays with a PhMemo (the pipe's property call): the first call and unchanged
+    points are bit-for-bit the call without memo; moved points (a Newton iteration's
+    relative 1e-6, a predictor's 1e-3) agree with a fresh call to the tolerances of
+    test_numba_and_numpy_agree (both stop their T iteration at a round-off-level
+    iterate, from different starts), with the same region and status."""
+    P, H = _grid()
+    m = NB.PhMemo()
+    first = NB.ph_arrays(P, H, memo=m)
+    assert m.computed == P.size
+    fresh = NB.ph_arrays(P, H)
+    fields = ("T", "rho", "u", "s", "cp", "x", "drho_dp_h", "drho_dh_p", "region", "status")
+    for f in fields:
+        np.testing.assert_array_equal(getattr(first, f), getattr(fresh, f))
+    again = NB.ph_arrays(P, H, memo=m)
+    assert m.computed == 0
+    for f in fields:
+        np.testing.assert_array_equal(getattr(again, f), getattr(fresh, f))
+    rng = np.random.default_rng(3)
+    tols = {"T": 2e-12, "rho": 2e-12, "u": 2e-12, "s": 2e-12}
+    for rel in (1e-6, 1e-3):
+        P2 = P * (1.0 + rel * rng.standard_normal(P.size))
+        H2 = H * (1.0 + rel * rng.standard_normal(P.size))
+        a = NB.ph_arrays(P2, H2)
+        b = NB.ph_arrays(P2, H2, memo=m)
+        assert m.computed == P.size
+        assert np.array_equal(a.status, b.status) and np.array_equal(a.region, b.region)
+        for f in ("T", "rho", "u", "s", "cp", "x", "drho_dp_h", "drho_dh_p"):
+            x, y = getattr(a, f), getattr(b, f)
+            fin = np.isfinite(x)
+            assert np.array_equal(fin, np.isfinite(y))
+            scale = np.abs(x[fin]).max()
+            err = np.abs(x[fin] - y[fin])
+            assert np.all(err <= tols.get(f, 5e-10) * np.abs(x[fin]) + 1e-12 * scale), (rel, f)
+
+
+def test_memo_reproduces_a_point_moved_and_moved_back():
+    """A difference quotient evaluates F(y), F(y + d e_j), F(y + d e_k), ...: a point
+    moved by one column (its p) and the next (its h) and back at the third must give
+    F(y)'s state to the bit (a
+    warm-started recomputation differs by round-off, which (F - F(y))/d would turn
+    into an error of 1e-13 |F| / d in an entry that should be zero)."""
+    P = np.array([1e5, 5e6, 5e6, 12e6, 25e6])
+    H = np.array([2.0e5, 3.4e6, 1.0e6, 3.2e6, 1.8e6])
+    m = NB.PhMemo()
+    base = NB.ph_arrays(P, H, memo=m)
+    for j in range(P.size):
+        # column "p of point j", then column "h of point j", then a column elsewhere
+        Pj = P.copy()
+        Pj[j] *= 1.0 + 1.5e-8
+        Hj = H.copy()
+        Hj[j] *= 1.0 + 1.5e-8
+        for p_col, h_col in ((Pj, H), (P, Hj)):
+            moved = NB.ph_arrays(p_col, h_col, memo=m)
+            assert m.computed == 1 and moved.rho[j] != base.rho[j]
+        back = NB.ph_arrays(P, H, memo=m)
+        assert m.computed == 0
+        for f in ("T", "rho", "u", "s", "cp", "drho_dp_h", "drho_dh_p", "region", "status"):
+            np.testing.assert_array_equal(getattr(back, f), getattr(base, f))

@@ -96,6 +96,7 @@ from dnasim.components.physics import (
     saturation_enthalpies,
     upwind_mean_weighted,
     upwind_weight,
+    upwind_weight_pair,
 )
 
 #: phase branch codes (``dnasim.media.if97_numba.ph_branch_scalar``)
@@ -312,8 +313,7 @@ class Channel:
         dM = xp[self.M]
         dU = xp[self.U]
         # the upwind weights of every face, once: wp = w(m[j]), wm = w(-m[j])
-        wp = upwind_weight(m, self.m_eps)
-        wm = upwind_weight(-m, self.m_eps)
+        wp, wm = upwind_weight_pair(m, self.m_eps)
         E = wp * h[:-1] - wm * h[1:]  # face_energy
         mass = dM - (m[:-1] - m[1:])
         energy = dU - (E[:-1] - E[1:] - Q)

@@ -50,7 +50,9 @@ class PropertyArrays:
     Only the points whose (p, h) changed since the previous call are sent to the
     medium, in one ``medium.states`` call. A finite-difference Jacobian perturbs a
     few points at a time, so for a long pipe this saves most property evaluations;
-    a Newton iteration changes every point and costs one array call.
+    a Newton iteration changes every point and costs one array call. A medium with
+    ``states_memo`` (IF97 water, compiled) does this bookkeeping itself, in its
+    compiled loop, and also starts each moved point from its previous state.
     """
 
     def __init__(self):
@@ -59,14 +61,22 @@ class PropertyArrays:
         self.branch = None
         self.out = None
         self.medium = None
+        self.memo = None
 
     def __call__(self, medium, p, h, branch=None):
         """As ``properties``; ``branch`` (int array or None) is part of each point's key."""
+        if self.medium is not medium:
+            self.medium = medium
+            self.p = None
+            new_memo = getattr(medium, "states_memo", None)
+            self.memo = new_memo() if new_memo is not None else None
+        if self.memo is not None:
+            r = medium.states(p, h, branch=branch, memo=self.memo)
+            return r.T, r.rho, r.u
         p = np.asarray(p, dtype=float)
         h = np.asarray(h, dtype=float)
         b = np.zeros(p.shape, dtype=np.int64) if branch is None else np.asarray(branch)
-        if self.p is None or self.p.shape != p.shape or self.medium is not medium:
-            self.medium = medium
+        if self.p is None or self.p.shape != p.shape:
             T, rho, u = properties(medium, p, h, b)
         else:
             changed = np.flatnonzero((p != self.p) | (h != self.h) | (b != self.branch))
@@ -117,6 +127,25 @@ def logarithmic_mean(x, y):
     return out
 
 
+#: arrays at least this long go to the compiled ``lmtd`` (``lmtd_numba``); shorter ones
+#: stay in numpy, so a small plant does not import numba for it
+LMTD_NUMBA_MIN = 64
+
+
+def _lmtd_compiled():
+    """``lmtd_numba.lmtd``, imported on first use; None when numba is missing."""
+    if _lmtd_compiled.fn is False:
+        try:
+            from dnasim.components.lmtd_numba import lmtd as fn
+        except ImportError:  # pragma: no cover - numba is a dependency
+            fn = None
+        _lmtd_compiled.fn = fn
+    return _lmtd_compiled.fn
+
+
+_lmtd_compiled.fn = False
+
+
 def lmtd(dT_a, dT_b, dT_reg):
     """Regularised, signed log-mean temperature difference [K].
 
@@ -133,7 +162,20 @@ def lmtd(dT_a, dT_b, dT_reg):
     heat flow ODE is not Lipschitz and Newton fails. With width dT_reg the slope
     is bounded by about a / (dT_reg ln^2(a/dT_reg)); for |dT| >~ 10 dT_reg the
     value is the exact LMTD to 1e-4 relative.
+
+    Arrays of ``LMTD_NUMBA_MIN`` elements or more (long channels) are computed by the
+    compiled loop of ``dnasim.components.lmtd_numba`` (the same operations; equal to
+    round-off; at 1000 elements 2.7 times faster with every |dT| < 40 dT_reg, more
+    beyond).
     """
+    if (
+        isinstance(dT_a, np.ndarray)
+        and isinstance(dT_b, np.ndarray)
+        and dT_a.shape == dT_b.shape
+        and dT_a.size >= LMTD_NUMBA_MIN
+        and _lmtd_compiled() is not None
+    ):
+        return _lmtd_compiled()(dT_a, dT_b, dT_reg)
     a_pos = softplus(dT_a, dT_reg)
     b_pos = softplus(dT_b, dT_reg)
     a_neg = softplus(-np.asarray(dT_a, dtype=float), dT_reg)
@@ -247,6 +289,19 @@ def upwind_weight(m, eps):
     q = np.where(np.abs(x) >= 1.0, np.abs(m), eps * (0.375 + 0.75 * x2 - 0.125 * x2 * x2))
     d = TAIL_REL * eps
     return 0.5 * (m + q) + d * d / (4.0 * np.sqrt(m * m + d * d))
+
+
+def upwind_weight_pair(m, eps):
+    """(w(m), w(-m)) for an array of flows m [kg/s]: ``upwind_weight`` of both signs,
+    bit-identical to two calls (q and the tail are even in m, and (-m) + q == q - m
+    exactly in floating point), for half the array operations."""
+    m = np.asarray(m, dtype=float)
+    x = m / eps
+    x2 = x * x
+    q = np.where(np.abs(x) >= 1.0, np.abs(m), eps * (0.375 + 0.75 * x2 - 0.125 * x2 * x2))
+    d = TAIL_REL * eps
+    tail = d * d / (4.0 * np.sqrt(m * m + d * d))
+    return 0.5 * (m + q) + tail, 0.5 * (q - m) + tail
 
 
 def blend_to_own(a, b, eps):

@@ -90,24 +90,31 @@ class IF97Water(Medium):
             float(r.drho_dh_p),
         )
 
+    def states_memo(self):
+        """A new memo for ``states(..., memo=)`` (:class:`dnasim.media.if97_numba.PhMemo`:
+        one per fixed set of points, e.g. a pipe's volumes), or None with the numpy
+        kernel."""
+        return NB.PhMemo() if self.kernel == "numba" else None
+
     @property
     def phase_branches(self) -> bool:
         """True when ``states`` takes ``branch=`` (the compiled kernel)."""
         return self.kernel == "numba"
 
-    def states(self, p, h, *, check: bool = True, branch=None) -> FluidStates:
+    def states(self, p, h, *, check: bool = True, branch=None, memo=None) -> FluidStates:
         """Vectorised :meth:`state` (see :meth:`Medium.states`): one kernel call.
 
         branch: None, or per point a forced phase branch (0 auto, 1 liquid, 2 dome,
         3 vapour: :func:`dnasim.media.if97_numba.ph_branch_scalar`), compiled kernel
-        only."""
-        if branch is not None and self.kernel == "numba":
-            r = NB.ph_arrays(p, h, branch)
+        only. memo: None, or the caller's :meth:`states_memo` for this set of points
+        (unchanged points are copied, moved ones warm-started; compiled kernel only)."""
+        if self.kernel == "numba" and (branch is not None or memo is not None):
+            r = NB.ph_arrays(p, h, branch, memo)
         else:
             r = NB.ph_arrays(p, h) if self.kernel == "numba" else K.ph(p, h)
         if check:
             r.raise_first_bad(self.label)
-        self.n_evaluations += r.p.size
+        self.n_evaluations += r.p.size if memo is None else memo.computed
         return FluidStates(
             r.p,
             r.h,
@@ -170,6 +177,7 @@ def _load_compiled_kernels() -> None:
         p, h = np.array([1e6]), np.array([1e6])
         NB.ph_scalar(1e6, 1e6)
         NB.ph_arrays(p, h)
+        NB.ph_arrays(p, h, memo=NB.PhMemo())
         NB.h_pT_scalar(1e6, 400.0)
         NB.saturation_arrays(p)
     _load_compiled_kernels.done = True

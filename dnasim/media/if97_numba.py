@@ -487,9 +487,15 @@ def _solve_region3(p, h, rho, T):
 
 
 @_njit
-def _solve_single(p, h, kind, lo, hi):
-    """(T, record, region, status) for a single-phase state (see if97_kernel._solve_single)."""
-    T0, rho0 = _t_guess(p, h, kind)
+def _solve_single(p, h, kind, lo, hi, Tw):
+    """(T, record, region, status) for a single-phase state (see if97_kernel._solve_single).
+
+    Tw [K]: a start temperature (warm start from a nearby solved state, :class:`PhMemo`)
+    or NaN: then the backward equations give the start (and, in region 3, the density)."""
+    if Tw == Tw:
+        T0, rho0 = Tw, math.nan
+    else:
+        T0, rho0 = _t_guess(p, h, kind)
     if not (T0 > T_MIN + 1.0):
         rec, _, _, _ = _eval(p, T_MIN, True, rho0)
         if h < rec[1]:
@@ -546,33 +552,46 @@ def _sat_records(p):
 @_njit
 def ph_scalar(p, h):
     """(T, rho, u, s, cp, x, drho_dp_h, drho_dh_p, region, status) at (p [Pa], h [J/kg])."""
+    return _ph_auto(p, h, math.nan)[0]
+
+
+#: an upper bound [J/kg] of h''(p) over the whole saturation line (its maximum is
+#: 2803.285 kJ/kg at 3.08 MPa): above it a state is vapour without evaluating h''(p)
+H_VAP_MAX = 2.8035e6
+
+
+@_njit
+def _ph_auto(p, h, Tw):
+    """(state tuple of :func:`ph_scalar`, (dT/dp)_h [K/Pa] (NaN in the dome or not ok)).
+
+    Tw: warm-start temperature of a single-phase state, or NaN (:func:`_solve_single`)."""
     nan = math.nan
     if not (math.isfinite(p) and math.isfinite(h)):
-        return nan, nan, nan, nan, nan, nan, nan, nan, 0, 1
+        return (nan, nan, nan, nan, nan, nan, nan, nan, 0, 1), nan
     if p < P_MIN:
-        return nan, nan, nan, nan, nan, nan, nan, nan, 0, 2
+        return (nan, nan, nan, nan, nan, nan, nan, nan, 0, 2), nan
     if p > P_MAX:
-        return nan, nan, nan, nan, nan, nan, nan, nan, 0, 3
+        return (nan, nan, nan, nan, nan, nan, nan, nan, 0, 3), nan
     kind = 0
     lo = T_MIN
     hi = T_MAX_R5 if p <= P_R5_MAX else T_25
     if p < P_C:
         Ts = _tsat(p)
         # one saturated side decides most states; both are needed only in the dome and
-        # near p_c (where the dome closes)
+        # near p_c (where the dome closes); above H_VAP_MAX neither
         near_c = p > 21e6
+        if h > H_VAP_MAX and not near_c:
+            return _single_tp(p, h, _solve_single(p, h, -1, Ts, hi, Tw))
         if near_c or h < 2.0e6:
-            recL, _, _, _ = _eval(p, Ts, True, math.nan)
+            recL, _, _, _ = _eval(p, Ts, True, nan)
             if h < recL[1] and not near_c:
-                T, rec, reg, st = _solve_single(p, h, 1, lo, Ts)
-                return _single_out(p, h, T, rec, reg, st)
-            recV, _, _, _ = _eval(p, Ts, False, math.nan)
+                return _single_tp(p, h, _solve_single(p, h, 1, lo, Ts, Tw))
+            recV, _, _, _ = _eval(p, Ts, False, nan)
         else:
-            recV, _, _, _ = _eval(p, Ts, False, math.nan)
+            recV, _, _, _ = _eval(p, Ts, False, nan)
             if h > recV[1]:
-                T, rec, reg, st = _solve_single(p, h, -1, Ts, hi)
-                return _single_out(p, h, T, rec, reg, st)
-            recL, _, _, _ = _eval(p, Ts, True, math.nan)
+                return _single_tp(p, h, _solve_single(p, h, -1, Ts, hi, Tw))
+            recL, _, _, _ = _eval(p, Ts, True, nan)
         _, dps = _psat_slope(Ts)
         dTs = 1.0 / dps
         hL = recL[1]
@@ -586,9 +605,15 @@ def ph_scalar(p, h):
             kind = -1
             lo = Ts
         else:
-            return _dome(p, h, Ts, dTs, recL, recV)
-    T, rec, reg, st = _solve_single(p, h, kind, lo, hi)
-    return _single_out(p, h, T, rec, reg, st)
+            return _dome(p, h, Ts, dTs, recL, recV), nan
+    return _single_tp(p, h, _solve_single(p, h, kind, lo, hi, Tw))
+
+
+@_njit
+def _single_tp(p, h, solved):
+    """(state tuple of :func:`_single_out`, (dT/dp)_h = -(dh/dp)_T / cp [K/Pa])."""
+    T, rec, reg, st = solved
+    return _single_out(p, h, T, rec, reg, st), -rec[6] / rec[5] if st == 0 else math.nan
 
 
 @_njit
@@ -641,26 +666,34 @@ def ph_branch_scalar(p, h, branch):
     discrete mode, ``dnasim.components.channel``) sees no kink within a step. Where
     the forced branch has no solution the true state is returned.
     """
+    return _ph_branch(p, h, branch, math.nan)[0]
+
+
+@_njit
+def _ph_branch(p, h, branch, Tw):
+    """(state tuple of :func:`ph_branch_scalar`, (dT/dp)_h [K/Pa]); Tw as in
+    :func:`_ph_auto`."""
     if branch == AUTO or not (P_MIN <= p < P_C) or not (math.isfinite(p) and math.isfinite(h)):
-        return ph_scalar(p, h)
+        return _ph_auto(p, h, Tw)
     Ts = _tsat(p)
     if branch == LIQUID:
-        T, rec, reg, st = _solve_single(p, h, 1, T_MIN, Ts + BRANCH_MARGIN_T)
-        if st != 0:
-            return ph_scalar(p, h)
-        return _single_out(p, h, T, rec, reg, st)
+        r = _single_tp(p, h, _solve_single(p, h, 1, T_MIN, Ts + BRANCH_MARGIN_T, Tw))
+        if r[0][9] != 0:
+            return _ph_auto(p, h, math.nan)
+        return r
     if branch == VAPOUR:
         hi = T_MAX_R5 if p <= P_R5_MAX else T_25
-        T, rec, reg, st = _solve_single(p, h, -1, max(Ts - BRANCH_MARGIN_T, T_MIN), hi)
-        if st != 0:
-            return ph_scalar(p, h)
-        return _single_out(p, h, T, rec, reg, st)
+        lo = max(Ts - BRANCH_MARGIN_T, T_MIN)
+        r = _single_tp(p, h, _solve_single(p, h, -1, lo, hi, Tw))
+        if r[0][9] != 0:
+            return _ph_auto(p, h, math.nan)
+        return r
     _, dps = _psat_slope(Ts)
     recL, _, _, okL = _eval(p, Ts, True, math.nan)
     recV, _, _, okV = _eval(p, Ts, False, math.nan)
     if not (okL and okV and recV[1] > recL[1]):
-        return ph_scalar(p, h)
-    return _dome(p, h, Ts, 1.0 / dps, recL, recV)
+        return _ph_auto(p, h, math.nan)
+    return _dome(p, h, Ts, 1.0 / dps, recL, recV), math.nan
 
 
 @_njit
@@ -714,11 +747,118 @@ def _ph_branch_loop(p, h, branch, T, rho, u, s, cp, x, dp, dh, region, status):
         _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status)
 
 
-def ph_arrays(p, h, branch=None) -> K.PhResult:
+#: states remembered per point by :class:`PhMemo`: the base state and the two states a
+#: difference quotient makes by moving p and h of the point in consecutive columns
+MEMO_SLOTS = 3
+
+
+@_njit
+def _ph_memo_loop(p, h, branch, order, F, B, RS, T, rho, u, s, cp, x, dp, dh, region, status):
+    """As _ph_branch_loop, remembering each point's last MEMO_SLOTS states in the memo
+    arrays of :class:`PhMemo` (order[:, i]: its slots from the most to the least recently
+    used); returns how many points were computed.
+
+    A point whose (p, h, branch) equals a remembered one is copied from it; otherwise a
+    single-phase point of region 1 or 2 starts its T iteration from the most recent
+    state moved to first order, T_w = T' + (h - h')/cp' + (dT/dp)_h' (p - p'), instead
+    of the backward equations, and the result replaces the least recently used slot."""
+    n_slots = order.shape[0]
+    computed = 0
+    for i in range(p.size):
+        pi = p[i]
+        hi = h[i]
+        bi = branch[i]
+        rank = -1
+        for r in range(n_slots):
+            k = order[r, i]
+            if pi == F[k, 0, i] and hi == F[k, 1, i] and bi == B[k, i]:
+                rank = r
+                break
+        if rank >= 0:
+            T[i] = F[k, 3, i]
+            rho[i] = F[k, 4, i]
+            u[i] = F[k, 5, i]
+            s[i] = F[k, 6, i]
+            cp[i] = F[k, 7, i]
+            x[i] = F[k, 8, i]
+            dp[i] = F[k, 9, i]
+            dh[i] = F[k, 10, i]
+            region[i] = RS[k, 0, i]
+            status[i] = RS[k, 1, i]
+        else:
+            a = order[0, i]
+            Tw = math.nan
+            if RS[a, 1, i] == 0 and bi == B[a, i] and (RS[a, 0, i] == 1 or RS[a, 0, i] == 2):
+                Tw = F[a, 3, i] + (hi - F[a, 1, i]) / F[a, 7, i] + F[a, 2, i] * (pi - F[a, 0, i])
+                # near the limits of the range the backward equations decide (status 4, 5)
+                if not (T_MIN + 2.0 < Tw < T_25 - 3.0):
+                    Tw = math.nan
+            r, Tp = _ph_branch(pi, hi, bi, Tw)
+            computed += 1
+            _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status)
+            rank = n_slots - 1
+            k = order[rank, i]
+            F[k, 0, i] = pi
+            F[k, 1, i] = hi
+            F[k, 2, i] = Tp
+            F[k, 3, i] = r[0]
+            F[k, 4, i] = r[1]
+            F[k, 5, i] = r[2]
+            F[k, 6, i] = r[3]
+            F[k, 7, i] = r[4]
+            F[k, 8, i] = r[5]
+            F[k, 9, i] = r[6]
+            F[k, 10, i] = r[7]
+            B[k, i] = bi
+            RS[k, 0, i] = r[8]
+            RS[k, 1, i] = r[9]
+        for r in range(rank, 0, -1):  # slot k becomes the most recently used
+            order[r, i] = order[r - 1, i]
+        order[0, i] = k
+    return computed
+
+
+class PhMemo:
+    """The last MEMO_SLOTS states of each of a fixed set of points, for
+    :func:`ph_arrays` (``memo=``).
+
+    A finite-difference Jacobian moves a few points per residual and a Newton iteration
+    moves every point by little: with a memo, unchanged points are copied and moved
+    single-phase points start their temperature iteration from the remembered state
+    (one or two evaluations of the Gibbs function instead of the backward equation and
+    three). A warm-started result agrees with a call without memo to round-off (the
+    iteration stops at the same tolerance), not to the bit, so several states are kept:
+    a point moved by difference quotients (its p in one column, its h in the next) and
+    moved back is copied, and F(y) is reproduced exactly (a difference quotient
+    (F - F(y))/d would turn the round-off into errors of 1e-13 |F| / d in entries that
+    should be zero). ``computed``: the points computed by the last call.
+    """
+
+    def __init__(self):
+        self.n = -1
+        self.computed = 0
+
+    def arrays(self, n):
+        """The memo arrays (order, floats, branches, region and status) for n points,
+        reset when n changes: floats[slot] holds p, h, (dT/dp)_h, then T, rho, u, s,
+        cp, x, drho_dp_h, drho_dh_p."""
+        if n != self.n:
+            self.n = n
+            k = MEMO_SLOTS
+            self.order = np.repeat(np.arange(k, dtype=np.int64)[:, None], n, axis=1)
+            self.floats = np.full((k, 11, n), np.nan)
+            self.branches = np.full((k, n), -1, dtype=np.int64)
+            self.region_status = np.ones((k, 2, n), dtype=np.int8)
+        return self.order, self.floats, self.branches, self.region_status
+
+
+def ph_arrays(p, h, branch=None, memo=None) -> K.PhResult:
     """As :func:`dnasim.media.if97_kernel.ph`, compiled: a :class:`PhResult` of arrays.
 
     branch: None, or an int array of the points' branch codes (AUTO, LIQUID, DOME,
-    VAPOUR; see :func:`ph_branch_scalar`)."""
+    VAPOUR; see :func:`ph_branch_scalar`). memo: None, or a :class:`PhMemo` kept by
+    the caller for this set of points (its last states: unchanged points are copied,
+    moved ones warm-started)."""
     p, h = np.broadcast_arrays(np.asarray(p, dtype=float), np.asarray(h, dtype=float))
     shape = p.shape
     pf = np.ascontiguousarray(p.ravel())
@@ -732,7 +872,11 @@ def ph_arrays(p, h, branch=None) -> K.PhResult:
     r.region = np.empty(n, dtype=np.int8)
     r.status = np.empty(n, dtype=np.int8)
     out = (r.T, r.rho, r.u, r.s, r.cp, r.x, r.drho_dp_h, r.drho_dh_p, r.region, r.status)
-    if branch is None:
+    if memo is not None:
+        bf = np.zeros(n, dtype=np.int64) if branch is None else branch
+        bf = np.ascontiguousarray(np.broadcast_to(np.asarray(bf, dtype=np.int64), shape).ravel())
+        memo.computed = _ph_memo_loop(pf, hf, bf, *memo.arrays(n), *out)
+    elif branch is None:
         _ph_loop(pf, hf, *out)
     else:
         bf = np.ascontiguousarray(
