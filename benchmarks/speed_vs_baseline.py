@@ -162,7 +162,9 @@ def main(argv=None) -> int:
         "--now-exe",
         default=None,
         help="the dnasim executable to compare with the baseline (default: this checkout's, "
-        "next to this Python); e.g. a script running another checkout, for a before/after",
+        "next to this Python); e.g. a script running another checkout for a before/after: "
+        "PYTHONPATH=<checkout> python -P -c 'from dnasim.entry import main; main()' \"$@\" "
+        "(-P: else the current directory's dnasim comes first)",
     )
     args = ap.parse_args(argv)
     base_exe = install_baseline(args.baseline_dir)
