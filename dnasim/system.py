@@ -396,10 +396,48 @@ class System:
     def residual(self, t, y, yp):
         """F(t, y, y') for the whole plant (length n)."""
         F = np.empty(self.n_equations)
-        for b in self.blocks:
-            x = LocalVector(y[b.gidx], b.index, b.modes)
-            xp = LocalVector(yp[b.gidx], b.index, b.modes)
-            r = b.comp.residual(t, x, xp)
+        self._component_rows(t, y, yp, F, self.blocks)
+        self._node_rows(y, F)
+        self._checked_lengths = True
+        self._check_finite(t, F)
+        return F
+
+    def residual_for_columns(self, cols):
+        """F_cols(t, y, y', f0) -> F(t, y, y') at a point that differs only in y[cols] and
+        y'[cols] from the point where F is f0: the rows that read none of ``cols`` are
+        taken from f0, the others are evaluated again (the components with one of
+        ``cols`` among their variables, port values or signal inputs, and the node
+        equations when a flow, a delivered enthalpy or a node enthalpy is among them).
+
+        Used by the finite-difference Jacobian (``dnasim.solver.linear_algebra``): a
+        column group perturbs a few columns, and the rows the Jacobian keeps from
+        F(y + d) - f0 are exactly the rows of the sparsity pattern in those columns,
+        which are all evaluated again, with the same inputs as in a whole-plant
+        evaluation, so the matrix is the same to the bit. Each component is evaluated
+        as a whole (its ``prepare`` included), never in part."""
+        cols = np.unique(np.asarray(cols, dtype=np.intp))
+        blocks = [b for b in self.blocks if np.isin(b.gidx, cols).any()]
+        node_cols = np.concatenate((self._mix_flow, self._mix_hout, self._node_h))
+        nodes = bool(np.isin(node_cols, cols).any())
+
+        def F_cols(t, y, yp, f0):
+            F = np.array(f0, dtype=float)
+            self._component_rows(t, y, yp, F, blocks)
+            if nodes:
+                self._node_rows(y, F)
+            self._check_finite(t, F)
+            return F
+
+        return F_cols
+
+    def _component_rows(self, t, y, yp, F, blocks) -> None:
+        """F[rows of each block] = its component's residual."""
+        for b in blocks:
+            r = b.comp.residual(
+                t,
+                LocalVector(y[b.gidx], b.index, b.modes),
+                LocalVector(yp[b.gidx], b.index, b.modes),
+            )
             if not self._checked_lengths:
                 nr = np.size(r)
                 ne = b.eq_slice.stop - b.eq_slice.start
@@ -410,21 +448,23 @@ class System:
                         f"but declares {ne} equations"
                     )
             F[b.eq_slice] = r
-        # node mass balances, sum_k n_k (the rows of ``node_matrix``, without the
-        # sparse-product call overhead)
+
+    def _node_rows(self, y, F) -> None:
+        """F[node rows]: the mass balances sum_k n_k (the rows of ``node_matrix``,
+        without the sparse-product call overhead) and the mixing equations."""
         F[self.node_eq_start : self.node_eq_start + self.n_nodes] = np.bincount(
             self._mix_node, weights=self._mix_sign * y[self._mix_flow], minlength=self.n_nodes
         )
         F[self.node_eq_start + self.n_nodes :] = self.node_mixing(y)
-        self._checked_lengths = True
-        if not np.all(np.isfinite(F)):
+
+    def _check_finite(self, t, F) -> None:
+        if not np.isfinite(F).all():
             bad = np.flatnonzero(~np.isfinite(F))[:3]
             raise ResidualDomainError(
                 "residual not finite in "
                 + ", ".join(self.eq_names[i] for i in bad)
                 + f" at t = {t:g}"
             )
-        return F
 
     def node_mixing(self, y) -> np.ndarray:
         """Residuals of the nodes' mixing equations [W] (see the module docstring)."""

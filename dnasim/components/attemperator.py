@@ -163,10 +163,17 @@ class Attemperator(Component):
             ),
         ]
 
+    def prepare(self, t, x, xp):
+        """The states of ``_states``, once per residual evaluation (``x.work``)."""
+        return self._properties(x)
+
     def _states(self, x):
-        """(T, rho, u) at the steam node [0] and in the volume [1]; ``PropertyArrays``
-        calls the medium only for points that changed, so the equations that share
-        them cost one property evaluation per residual."""
+        """(T, rho, u) at the steam node [0] and in the volume [1]: ``x.work`` in a
+        residual evaluation (``prepare``), else computed."""
+        return x.work if x.work is not None else self._properties(x)
+
+    def _properties(self, x):
+        """``PropertyArrays`` calls the medium only for the points that changed."""
         return self._props(
             self.medium,
             np.array([x["steam_in.p"], x["p_v"]]),

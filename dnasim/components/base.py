@@ -660,18 +660,13 @@ class Component:
         """F of the component's equations: by default each declared
         ``Equation.residual`` in the order of ``equations()`` (a component whose
         equations carry no functions overrides this method)."""
-        eqs = self.__dict__.get("_declared")
-        if eqs is None:
-            eqs = self._declared = self.equations()
-            missing = [e.name for e in eqs if e.residual is None]
-            if missing:
-                raise NotImplementedError(
-                    f"component '{self.name}' ({type(self).__name__}): equation(s) "
-                    f"{', '.join(missing)} declare no residual function"
-                )
+        declared = self.__dict__.get("_declared")
+        if declared is None:
+            declared = self._declared = self._declare_residuals()
+        eqs, functions = declared
         x.work = self.prepare(t, x, xp)
-        if all(e.size is None for e in eqs):
-            return np.array([e.residual(t, x, xp) for e in eqs], dtype=float)
+        if functions is not None:  # scalar equations only: one value each
+            return np.array([f(t, x, xp) for f in functions], dtype=float)
         out = []
         for e in eqs:
             r = np.asarray(e.residual(t, x, xp), dtype=float).reshape(-1)
@@ -682,6 +677,19 @@ class Component:
                 )
             out.append(r)
         return np.concatenate(out)
+
+    def _declare_residuals(self):
+        """(equations, their residual functions when every one is scalar, else None),
+        made once per component (``residual``'s per-call work is the calls alone)."""
+        eqs = self.equations()
+        missing = [e.name for e in eqs if e.residual is None]
+        if missing:
+            raise NotImplementedError(
+                f"component '{self.name}' ({type(self).__name__}): equation(s) "
+                f"{', '.join(missing)} declare no residual function"
+            )
+        scalar = all(e.size is None for e in eqs)
+        return eqs, (tuple(e.residual for e in eqs) if scalar else None)
 
     def prepare(self, t: float, x: LocalVector, xp: LocalVector):
         """Hook: what several equations share, computed once per residual evaluation
