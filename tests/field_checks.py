@@ -692,6 +692,7 @@ CASES = [
     Case("boiling_60bar", check_boiling),
     Case("boiling_190bar", check_boiling),
     Case("condensing_pipe", check_condensing),
+    Case("condensing_pipe_volume_T", check_condensing),
     Case("supercritical_250bar", check_supercritical),
     Case("steam_800C", check_800C),
     Case("spray_saturation", check_spray, may_stop=spray_stop_is_explained),

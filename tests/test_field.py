@@ -20,11 +20,16 @@ from field_checks import CASES, evaluate, run_plant
 #: but too slowly (the flow next to a boiling volume is predicted ~3 kg/s off: liquid
 #: pressures move by 1e9 Pa per kg). Either alone still stops at 22.83 s.
 NOT_YET = {
-    "condensing_pipe": "stops at ~57.6 s: every saturated-vapour crossing (volumes 0 to 19) and "
-    "the first saturated-liquid crossings are passed; it stops where the collapsing steam draws "
-    "condensate back through the outlet valve: at the outlet's flow reversal the outlet node's "
-    "enthalpy swings between the tube's (1.2 MJ/kg) and the header's (0.63 MJ/kg) within the "
-    "upwind regularisation (|m| < 1e-3 kg/s), and full Newton does not converge there",
+    "condensing_pipe": "stops at ~57.6 s, when the collapsing steam draws condensate back from "
+    "the header (every saturated-vapour crossing and the first saturated-liquid crossings are "
+    "passed). The cause is the per-volume log-mean temperature difference (the seed's heat "
+    "model, the default): the last volume's inflow side switches to the header's water "
+    "(150 degC, colder than the 154 degC wall) while the volume is at 186 degC, and a log-mean "
+    "of differences of opposite sign is near 0 and nearly independent of the volume's "
+    "temperature; each Newton iteration that moves the outlet flow through its upwind band "
+    "swings the heat flow by up to 1e5 W and the corrector fails at every step size. The "
+    "same plant with each volume's own temperature (condensing_pipe_volume_T, "
+    'heat_transfer = "outlet") runs to the end',
 }
 
 
