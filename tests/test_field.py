@@ -22,14 +22,14 @@ from field_checks import CASES, evaluate, run_plant
 NOT_YET = {
     "condensing_pipe": "stops at ~57.6 s, when the collapsing steam draws condensate back from "
     "the header (every saturated-vapour crossing and the first saturated-liquid crossings are "
-    "passed). The cause is the per-volume log-mean temperature difference (the seed's heat "
-    "model, the default): the last volume's inflow side switches to the header's water "
-    "(150 degC, colder than the 154 degC wall) while the volume is at 186 degC, and a log-mean "
-    "of differences of opposite sign is near 0 and nearly independent of the volume's "
-    "temperature; each Newton iteration that moves the outlet flow through its upwind band "
-    "swings the heat flow by up to 1e5 W and the corrector fails at every step size. The "
-    "same plant with each volume's own temperature (condensing_pipe_volume_T, "
-    'heat_transfer = "outlet") runs to the end',
+    "passed). The cause is a heat flow that depends on the inflow's temperature (the seed's "
+    "per-volume log-mean difference, the default): at the outlet's flow reversal the last "
+    "volume's inflow side switches between the tube's water (186 degC) and the header's "
+    "(150 degC, colder than the 154 degC wall) within the upwind band |m| < 1e-3 kg/s; each "
+    "Newton iteration that moves the outlet flow through that band swings the heat flow by up "
+    "to 1e5 W, and the corrector fails at every step size. The arithmetic mean of the two "
+    "differences (heat_transfer = 'mean') stops the same way at 57.55 s; each volume's own "
+    "temperature (condensing_pipe_volume_T, heat_transfer = 'outlet') runs to the end",
 }
 
 
