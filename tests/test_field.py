@@ -22,14 +22,16 @@ from field_checks import CASES, evaluate, run_plant
 NOT_YET = {
     "condensing_pipe": "stops at ~57.6 s, when the collapsing steam draws condensate back from "
     "the header (every saturated-vapour crossing and the first saturated-liquid crossings are "
-    "passed). The cause is a heat flow that depends on the inflow's temperature (the seed's "
-    "per-volume log-mean difference, the default): at the outlet's flow reversal the last "
-    "volume's inflow side switches between the tube's water (186 degC) and the header's "
-    "(150 degC, colder than the 154 degC wall) within the upwind band |m| < 1e-3 kg/s; each "
-    "Newton iteration that moves the outlet flow through that band swings the heat flow by up "
-    "to 1e5 W, and the corrector fails at every step size. The arithmetic mean of the two "
-    "differences (heat_transfer = 'mean') stops the same way at 57.55 s; each volume's own "
-    "temperature (condensing_pipe_volume_T, heat_transfer = 'outlet') runs to the end",
+    "passed). Measured: the unknowns that do not converge are the heat flows and flows of the "
+    "last two (liquid) volumes, tube.Q[18..19] and tube.m[18..19], whose Newton updates swing "
+    "by 1e3 to 1e5 W and 0.01 to 0.1 kg/s at every step size down to 1e-12 s. The heat model "
+    "is the cause, not the flow reversal alone: the seed's per-volume log-mean difference "
+    "(the default) and the arithmetic mean of the inflow and volume differences ('mean') both "
+    "use the inflow's temperature, which switches from the tube's water (186 degC) to the "
+    "header's (150 degC, colder than the 154 degC wall) at the reversal, and both stop there "
+    "(57.60 and 57.55 s; a 10 times wider upwind band stops at 57.60 s too); with each "
+    "volume's own temperature (condensing_pipe_volume_T, heat_transfer = 'outlet') the same "
+    "plant runs to the end",
 }
 
 
