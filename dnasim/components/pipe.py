@@ -44,6 +44,15 @@ class Pipe(Component):
     Balances over a run: d(M_total)/dt = m[0] - m[n];
     d(U_total + E_wall)/dt = E[0] - E[n] - (sum Q with a fixed wall: Q_passed).
 
+    Choosing heat_transfer: "lmtd" (the default, the seed's) and "mean" use the
+    temperature of each volume's inflow T_a, so they assume a through-flow in one
+    direction. Where a tube's flow reverses while its wall is between the two
+    inflows' temperatures (a condenser tube drawing cold condensate back through its
+    outlet), that inflow switches side and the run can stop
+    (tests/field/condensing_pipe.toml stops at 57.6 s with either); "outlet", each
+    volume's own temperature as in the finite-volume pipes of Modelica.Fluid and
+    ClaRa, runs the same plant to the end (condensing_pipe_volume_T.toml).
+
     Wall model (``dnasim.components.walls``), when wall_layers > 0 or an outer
     boundary is given: the wall of each volume is 1 (lumped) or wall_layers + 1
     radial nodes (r_in, r_out, length, wall_conductivity; shell conductances
