@@ -556,7 +556,10 @@ def _start_run(out: Path, block: bool):
 
     return subprocess.Popen(
         [sys.executable, "-m", "dnasim", "run", str(PLANTS / "attemperator.toml")]
-        + ["-o", str(out), "-q"],
+        # tolerances 1e-10: ~1600 steps instead of ~320, so that the run outlasts the
+        # latest signal of these tests (1 s after the handler exists) on a fast, idle
+        # machine too (at the file's tolerances it once finished first: exit 0)
+        + ["-o", str(out), "-q", "--rtol", "1e-10", "--atol-scaled", "1e-10"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -596,6 +599,7 @@ def test_sigterm_at_any_early_time_gives_one_line_and_no_stale_files(tmp_path, d
     while not _catches_sigterm(proc.pid) and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.001)
     time.sleep(delay)
+    assert proc.poll() is None, "the run ended before the signal could be sent: lengthen it"
     proc.send_signal(signal.SIGTERM)
     _assert_interrupted_cleanly(proc, tmp_path / "out", "SIGTERM")
 

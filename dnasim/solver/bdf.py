@@ -617,7 +617,9 @@ class NordsieckBDF:
             else:
                 rate = (dnorm / first_norm) ** (1.0 / m) if first_norm > 0 else 0.0
                 if rate > NEWTON_RATE_MAX:
-                    self.failure = StepFailure(f"Newton converged too slowly (rate {rate:.2f})")
+                    self.failure = StepFailure(
+                        f"Newton converged too slowly (rate {rate:.2f})", _largest(dw)
+                    )
                     return False, y, yp
                 self.newton_ss = rate / (1.0 - rate)
             # With a matrix not built for this corrector (kept from earlier steps, or from
@@ -635,7 +637,9 @@ class NordsieckBDF:
                 if not all_finite(f):
                     self._note_nonfinite(t, f)
                     return False, y, yp
-        self.failure = StepFailure(f"Newton did not converge in {max_iters} iterations")
+        self.failure = StepFailure(
+            f"Newton did not converge in {max_iters} iterations", _largest(dw)
+        )
         # converging, only not fast enough: full Newton may finish it (``_correct``)
         self._slow_but_converging = (
             fresh and first_norm is not None and (m == 0 or dnorm < first_norm)
@@ -766,13 +770,21 @@ class NordsieckBDF:
         if scaled_error is not None:
             comps = np.argsort(-np.abs(scaled_error))[:5].tolist()
         if comps:
-            msg += ". Components most involved: " + ", ".join(self._name(i) for i in comps[:5])
+            msg += ". The variables most involved: " + ", ".join(self._name(i) for i in comps[:5])
         return msg + "."
 
     def _name(self, i: int) -> str:
         if self.names is not None and i < len(self.names):
             return f"{self.names[i]} (index {i})"
         return f"y[{i}]"
+
+
+def _largest(scaled: np.ndarray, k: int = 5) -> list:
+    """Indices of the k largest |entries| (the unknowns whose last Newton update was
+    largest against their tolerance: named in the failure message)."""
+    k = min(k, scaled.size)
+    idx = np.argpartition(-np.abs(scaled), k - 1)[:k]
+    return idx[np.argsort(-np.abs(scaled[idx]))].tolist()
 
 
 def all_finite(f: np.ndarray) -> bool:
