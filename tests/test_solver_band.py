@@ -59,13 +59,13 @@ def test_structurally_singular_pattern_has_no_band_ordering():
     assert BandOrdering.of(pattern) is None
 
 
-def test_iteration_matrix_stores_the_pattern_only_and_uses_the_band():
-    n = 40
-    pattern, pr, pc = shuffled_chain(n, seed=3)
-    k = np.linspace(1.0, 2.0, n)
+def chain_residual(k, pr, pc):
+    """F = y' + k y - 0.5 y_prev - 0.25 y_next on a chain of first-order lags, in the
+    chain's order, with unknowns and equations shuffled like ``shuffled_chain``'s
+    pattern (pc: the unknowns' places, pr: the equations')."""
+    n = k.size
 
     def residual(t, y, yp):
-        # chain of first-order lags in the original order, then shuffled like the pattern
         x = np.empty(n)
         x[pc] = y
         xp = np.empty(n)
@@ -74,6 +74,16 @@ def test_iteration_matrix_stores_the_pattern_only_and_uses_the_band():
         f[1:] -= 0.5 * x[:-1]
         f[:-1] -= 0.25 * x[1:]
         return f[pr]
+
+    return residual
+
+
+def test_iteration_matrix_stores_the_pattern_only_and_uses_the_band():
+    n = 40
+    pattern, pr, pc = shuffled_chain(n, seed=3)
+    k = np.linspace(1.0, 2.0, n)
+
+    residual = chain_residual(k, pr, pc)
 
     m = IterationMatrix(residual, n, sparsity=pattern)
     # the pattern of dF/dy + dF/dy', plus the diagonal only while KEEP_DIAGONAL is on
@@ -103,15 +113,7 @@ def test_band_ordering_ignores_the_added_diagonal(monkeypatch):
     wide = BandOrdering.of(with_diagonal)
     k = np.linspace(1.0, 2.0, n)
 
-    def residual(t, y, yp):
-        x = np.empty(n)
-        x[pc] = y
-        xp = np.empty(n)
-        xp[pc] = yp
-        f = xp + k * x
-        f[1:] -= 0.5 * x[:-1]
-        f[:-1] -= 0.25 * x[1:]
-        return f[pr]
+    residual = chain_residual(k, pr, pc)
 
     if not linear_algebra.KEEP_DIAGONAL:
         pytest.skip("no diagonal added")
