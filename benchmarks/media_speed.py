@@ -30,11 +30,8 @@ and n calls of the scalar ``state(p, h)`` (cache missed), CPU us per state.
 from __future__ import annotations
 
 import argparse
-import os
 import platform
-import subprocess
 import sys
-import tempfile
 import time
 
 import numpy as np
@@ -72,25 +69,10 @@ def best(fn, repeats=3):
 
 def load_old_medium():
     """The IF97 medium of commit ea86a1d (CoolProp IF97 + Newton), or None."""
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    try:
-        src = subprocess.run(
-            ["git", "-C", root, "show", "ea86a1d:dnasim/media/if97.py"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout
-    except (OSError, subprocess.CalledProcessError):
-        return None
-    import importlib.util
+    from revision import module_at
 
-    with tempfile.NamedTemporaryFile("w", suffix="_old_if97.py", delete=False) as f:
-        f.write(src)
-    spec = importlib.util.spec_from_file_location("old_if97", f.name)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    os.unlink(f.name)
-    return mod.IF97Water()
+    mod = module_at("ea86a1d", "dnasim/media/if97.py", "old_if97")
+    return None if mod is None else mod.IF97Water()
 
 
 def main() -> None:

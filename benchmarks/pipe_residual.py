@@ -18,10 +18,7 @@ same process (its numba cache goes to a temporary directory). Best of 7 (residua
 from __future__ import annotations
 
 import argparse
-import importlib.util
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -59,22 +56,9 @@ def residual_times(n):
 
 def load_base_kernel(rev):
     """if97_numba.py of git revision rev as a module (None if git fails)."""
-    try:
-        src = subprocess.run(
-            ["git", "show", f"{rev}:dnasim/media/if97_numba.py"],
-            cwd=HERE.parent,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout
-    except (OSError, subprocess.CalledProcessError):
-        return None
-    path = Path(tempfile.mkdtemp()) / f"if97_numba_{rev}.py"
-    path.write_text(src)
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    from revision import module_at
+
+    return module_at(rev, "dnasim/media/if97_numba.py", f"if97_numba_{rev}")
 
 
 def kernel_times(n, base):

@@ -198,6 +198,20 @@ def test_top_level_names():
     assert compile is compile_plant
 
 
+def _assert_coolprop_not_imported(code):
+    """Run ``code`` (which ends by writing COOLPROP=<imported?> to stderr) in a fresh
+    interpreter and check that it did not import CoolProp."""
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        timeout=120,
+    )
+    assert "COOLPROP=False" in out.stderr, out.stderr[-2000:]
+
+
 @pytest.mark.parametrize(
     "args", [["components"], ["check", str(ROOT / "plants" / "air_pipe.toml")], ["--help"]]
 )
@@ -212,15 +226,7 @@ def test_commands_on_air_do_not_import_coolprop(args):
         "    assert not e.code, e.code\n"
         "sys.stderr.write('COOLPROP=%s' % ('CoolProp' in sys.modules))\n"
     )
-    out = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        timeout=120,
-    )
-    assert "COOLPROP=False" in out.stderr, out.stderr[-2000:]
+    _assert_coolprop_not_imported(code)
 
 
 def test_python_api_on_air_does_not_import_coolprop():
@@ -232,15 +238,7 @@ def test_python_api_on_air_does_not_import_coolprop():
         "assert plant.simulate(t_end=5.0).success\n"
         "sys.stderr.write('COOLPROP=%s' % ('CoolProp' in sys.modules))\n"
     )
-    out = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        timeout=120,
-    )
-    assert "COOLPROP=False" in out.stderr, out.stderr[-2000:]
+    _assert_coolprop_not_imported(code)
 
 
 def test_python_api_takes_unit_strings_and_the_same_checks_as_files():

@@ -506,11 +506,11 @@ class NordsieckBDF:
         enters F only through y_i. plants/rankine.toml at 11 values of rtol from 0.9e-6
         to 1.1e-6, first 100 steps: without this attempt 6 runs crawled at h ~ 1e-5 s
         below t = 5 ms (main too, at 0.98e-6); with it all reached 0.40 to 0.64 s
-        (measured). Only after the attempts
-        from the predictor failed: as the first retry (instead of the predictor's start
-        for the fresh matrix and full Newton) it took tests/field/boiling_10bar.toml
-        into a step-size collapse at 36.4 s, where the predictor carries the volumes
-        across the phase line and the last values lie on the other side (measured)."""
+        (measured). Only after the attempts from the predictor failed: as the first
+        retry (instead of the predictor's start for the fresh matrix and full Newton) it
+        took tests/field/boiling_10bar.toml into a step-size collapse at 36.4 s, where
+        the predictor carries the volumes across the phase line and the last values lie
+        on the other side (measured)."""
         a = self.algebraic
         y, yp = y_pred.copy(), yp_pred.copy()
         yp[a] += cj * (self.y[a] - y[a])
@@ -768,7 +768,7 @@ class NordsieckBDF:
             msg += f"; last problem: {self.failure.reason}"
         comps = self.failure.bad_components
         if scaled_error is not None:
-            comps = np.argsort(-np.abs(scaled_error))[:5].tolist()
+            comps = _largest(scaled_error)
         if comps:
             msg += ". The variables most involved: " + ", ".join(self._name(i) for i in comps[:5])
         return msg + "."
