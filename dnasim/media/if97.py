@@ -22,9 +22,7 @@ limit.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import sys
 
 import numpy as np
 
@@ -174,8 +172,10 @@ def _load_compiled_kernels() -> None:
     if _load_compiled_kernels.done:
         return
     from dnasim.interrupts import held
+    from dnasim.media.numba_loading import install
 
-    with held(), _lean_cache_loads():
+    install()  # cached kernels load without numba's compiler set-up (0.1 to 0.2 s CPU)
+    with held():
         p, h = np.array([1e6]), np.array([1e6])
         NB.ph_scalar(1e6, 1e6)
         NB.ph_arrays(p, h)
@@ -186,43 +186,3 @@ def _load_compiled_kernels() -> None:
 
 
 _load_compiled_kernels.done = False
-
-
-@contextlib.contextmanager
-def _lean_cache_loads():
-    """Load cached kernels without numba's compiler set-up.
-
-    Before every load from its cache numba "refreshes" its CPU target: it imports
-    and installs the typing and lowering registries of everything it can compile
-    (numba.np.arraymath, linalg, random, typed containers, ...), 0.1 to 0.2 s CPU in
-    a fresh process, though a cached kernel is machine code that only needs the
-    runtime (NRT) symbols it links against. Inside this block a refresh called
-    directly by the cache loader (``numba.core.caching.Cache.load_overload``) only
-    initialises the runtime (``rtsys.initialize``); any other refresh, e.g. the
-    compiler's when a kernel is not in the cache, is numba's own in full, so a
-    compilation sees every registry. Where numba's internals differ from these
-    (another numba version) the block does nothing."""
-    try:
-        from numba.core.caching import Cache
-        from numba.core.registry import cpu_target
-        from numba.core.runtime import rtsys
-
-        ctx = cpu_target.target_context
-        loader = Cache.load_overload.__code__
-        full = type(ctx).refresh
-    except (ImportError, AttributeError):  # pragma: no cover - another numba
-        yield
-        return
-
-    def refresh():
-        caller = sys._getframe(1).f_code
-        if caller is loader:
-            rtsys.initialize(ctx)
-        else:
-            full(ctx)
-
-    ctx.refresh = refresh
-    try:
-        yield
-    finally:
-        del ctx.refresh
