@@ -45,6 +45,11 @@ def _message(what: str) -> str:
 def main(argv=None) -> int:
     """Run the ``dnasim`` command line with the signal handlers installed first."""
     install()
+    # Young-generation collections every 10000 new container objects instead of 700:
+    # importing numpy, scipy and numba creates ~10^5 objects that all survive, and each
+    # collection walks the survivors again (a small plant's run: 0.08 -> 0.05 s CPU in
+    # the collector; benchmarks/startup_phases.py)
+    gc.set_threshold(10000, 10, 10)
     try:
         import click
 
