@@ -82,6 +82,7 @@ import click  # noqa
 import dnasim.cli  # noqa
 acc["cli"] = clock() - t0
 timed(dnasim.cli, "_prepare_output", "prepare")
+timed(dnasim.cli, "_coolprop_cache", "prepare")  # imports dnasim.plantfile
 
 orig_load = dnasim.cli._load
 def load(plant_file):
