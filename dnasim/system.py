@@ -452,13 +452,17 @@ class System:
     def _node_rows(self, y, F) -> None:
         """F[node rows]: the mass balances sum_k n_k (the rows of ``node_matrix``,
         without the sparse-product call overhead) and the mixing equations."""
-        F[self.node_eq_start : self.node_eq_start + self.n_nodes] = np.bincount(
-            self._mix_node, weights=self._mix_sign * y[self._mix_flow], minlength=self.n_nodes
+        inflow = self._mix_sign * y[self._mix_flow]
+        start = self.node_eq_start
+        F[start : start + self.n_nodes] = np.bincount(
+            self._mix_node, weights=inflow, minlength=self.n_nodes
         )
-        F[self.node_eq_start + self.n_nodes :] = self.node_mixing(y)
+        F[start + self.n_nodes :] = self.node_mixing(y, inflow)
 
     def _check_finite(self, t, F) -> None:
-        if not np.isfinite(F).all():
+        # a sum is finite only when every term is (nan and inf propagate); a finite F
+        # whose sum overflows is looked at element by element
+        if not np.isfinite(F.sum()) and not np.isfinite(F).all():
             bad = np.flatnonzero(~np.isfinite(F))[:3]
             raise ResidualDomainError(
                 "residual not finite in "
@@ -466,9 +470,11 @@ class System:
                 + f" at t = {t:g}"
             )
 
-    def node_mixing(self, y) -> np.ndarray:
-        """Residuals of the nodes' mixing equations [W] (see the module docstring)."""
-        inflow = self._mix_sign * y[self._mix_flow]
+    def node_mixing(self, y, inflow=None) -> np.ndarray:
+        """Residuals of the nodes' mixing equations [W] (see the module docstring);
+        ``inflow``: the port flows into the nodes, sign * y[flow], when known."""
+        if inflow is None:
+            inflow = self._mix_sign * y[self._mix_flow]
         w = upwind_weight(inflow, self._mix_eps)
         terms = w * (y[self._mix_hout] - y[self._mix_hnode])
         return np.bincount(self._mix_node, weights=terms, minlength=self.n_nodes)

@@ -279,14 +279,25 @@ class Channel:
         With phase modes (``phase_modes``) each volume is evaluated on its mode's
         branch; the outlet node, whose state is the last volume's, on the last
         volume's branch; the inlet node as usual."""
-        p = np.concatenate(([x[f"{self.inlet}.p"]], x[self.pv], [x[f"{self.outlet}.p"]]))
-        h = np.concatenate(([x[f"{self.inlet}.h"]], x[self.hv], [x[f"{self.outlet}.h"]]))
+        p_at, h_at = self._state_positions(x.index)
+        p = x.data[p_at]
+        h = x.data[h_at]
         mode = x.modes.get(self.phase_key) if self.phase_modes else None
         branch = None
         if mode is not None:
             branch = np.concatenate(([0], mode, mode[-1:]))
         T, rho, u = self._props(medium, p, h, branch)
         return p, h, T, rho, u
+
+    def _state_positions(self, index):
+        """Positions of p and h of the states S_0..S_{n+1} in the component's local
+        vector (``index``: its local name -> position map), found once per layout."""
+        cached = self.__dict__.get("_positions")
+        if cached is None or cached[0] is not index:
+            p_at = [index[self.state_names(j)[0]] for j in range(self.n + 2)]
+            h_at = [index[self.state_names(j)[1]] for j in range(self.n + 2)]
+            cached = self._positions = (index, np.array(p_at), np.array(h_at))
+        return cached[1], cached[2]
 
     def inflow_weights(self, m):
         """(a, b): weights of the left and right neighbour in the inflow state of each
@@ -319,7 +330,10 @@ class Channel:
         energy = dU - (E[:-1] - E[1:] - Q)
         density = M - self.V_i * rho[1:-1]
         a, b = wp[:-1], wm[1:]  # inflow_weights
-        if self.mean or self.heat_transfer != "outlet":
+        # no heat transfer (kA = 0, adiabatic): Q[i] = kA_i dT = 0 needs no dT (Q - 0 dT
+        # is Q for every finite dT)
+        adiabatic = self.kA_i == 0.0 and not self.kA_exponent
+        if self.mean or (self.heat_transfer != "outlet" and not adiabatic):
             c = blend_to_own(a, b, self.m_eps)
             s = a + b + c
             T_a = (a * T[:-2] + b * T[2:] + c * T[1:-1]) / s
@@ -329,7 +343,9 @@ class Channel:
         else:
             internal = U - M * u[1:-1]
         T_i = T[1:-1]
-        if self.heat_transfer == "lmtd":
+        if adiabatic:
+            dT = 0.0
+        elif self.heat_transfer == "lmtd":
             dT = lmtd(T_a - T_wall, T_i - T_wall, self.dT_reg)
         elif self.heat_transfer == "outlet":
             dT = T_i - T_wall

@@ -71,6 +71,9 @@ class PropertyArrays:
             new_memo = getattr(medium, "states_memo", None)
             self.memo = new_memo() if new_memo is not None else None
         if self.memo is not None:
+            lean = getattr(medium, "T_rho_u", None)
+            if lean is not None and type(p) is np.ndarray and p.ndim == 1:
+                return lean(p, h, branch, self.memo)
             r = medium.states(p, h, branch=branch, memo=self.memo)
             return r.T, r.rho, r.u
         p = np.asarray(p, dtype=float)
@@ -176,12 +179,19 @@ def lmtd(dT_a, dT_b, dT_reg):
         and _lmtd_compiled() is not None
     ):
         return _lmtd_compiled()(dT_a, dT_b, dT_reg)
-    a_pos = softplus(dT_a, dT_reg)
-    b_pos = softplus(dT_b, dT_reg)
-    a_neg = softplus(-np.asarray(dT_a, dtype=float), dT_reg)
-    b_neg = softplus(-np.asarray(dT_b, dtype=float), dT_reg)
+    # the four softplus arrays (a_pos, b_pos; a_neg, b_neg) in one array z[sign, end],
+    # and the two logarithmic means in one call: the same operations on each element
+    # as four and two calls, bit-identical (tests/test_physics.py), for a third of the
+    # numpy calls (a short channel: 29 -> 15 us)
+    dT_a, dT_b = np.broadcast_arrays(np.asarray(dT_a, dtype=float), np.asarray(dT_b, dtype=float))
+    z = np.empty((2, 2) + dT_a.shape)
+    z[0, 0] = dT_a
+    z[0, 1] = dT_b
+    np.negative(z[0], out=z[1])
+    sp = softplus(z, dT_reg)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        return _logmean_positive(a_pos, b_pos) - _logmean_positive(a_neg, b_neg)
+        mean = _logmean_positive(sp[:, 0], sp[:, 1])
+    return mean[0] - mean[1]
 
 
 def _logmean_positive(x, y):
