@@ -179,6 +179,12 @@ def lmtd(dT_a, dT_b, dT_reg):
         and _lmtd_compiled() is not None
     ):
         return _lmtd_compiled()(dT_a, dT_b, dT_reg)
+    return lmtd_numpy(dT_a, dT_b, dT_reg)
+
+
+def lmtd_numpy(dT_a, dT_b, dT_reg):
+    """``lmtd`` in numpy whatever the size [K]; ``dT_reg`` [K] may be an array of the
+    shape of the differences (channels of different widths evaluated together)."""
     # the four softplus arrays (a_pos, b_pos; a_neg, b_neg) in one array z[sign, end],
     # and the two logarithmic means in one call: the same operations on each element
     # as four and two calls, bit-identical (tests/test_physics.py), for a third of the
@@ -315,7 +321,8 @@ def upwind_weight_pair(m, eps):
 
 
 def blend_to_own(a, b, eps):
-    """Weight c >= 0 of a volume's own state in its inflow state [kg/s]: with
+    """Weight c >= 0 of a volume's own state in its inflow state [kg/s] (eps [kg/s]: a
+    number, or an array of the shape of a and b): with
     s = a + b the sum of the inflow weights, c = (eps - s)^3/eps^2 for s < eps, else 0
     (C2 at s = eps). The inflow state (a x_left + b x_right + c x_own)/(s + c) is the
     exact upwind value when the inflow s >= eps, turns smoothly into the volume's
@@ -326,7 +333,8 @@ def blend_to_own(a, b, eps):
         return np.where(low, (eps - s) ** 3 / eps**2, 0.0)
     c = np.zeros(s.shape)
     if low.any():  # the power only where it is needed (a pipe in flow: nowhere)
-        c[low] = (eps - s[low]) ** 3 / eps**2
+        e = eps[low] if np.ndim(eps) else eps  # eps [kg/s]: a number, or one per element
+        c[low] = (e - s[low]) ** 3 / e**2
     return c
 
 
