@@ -356,6 +356,8 @@ class System:
         self.algebraic = ~self.differential
         self.quadrature = quadratures(self.pattern_y, self.pattern_yp)
         self._checked_lengths = False
+        #: what ``residual`` evaluates: the blocks, with alike components in batches
+        self.residual_units = evaluation_units(self.blocks)
 
         self.events = self._make_events()
 
@@ -396,7 +398,7 @@ class System:
     def residual(self, t, y, yp):
         """F(t, y, y') for the whole plant (length n)."""
         F = np.empty(self.n_equations)
-        self._component_rows(t, y, yp, F, self.blocks)
+        self._component_rows(t, y, yp, F, self.residual_units)
         self._node_rows(y, F)
         self._checked_lengths = True
         self._check_finite(t, F)
@@ -416,7 +418,7 @@ class System:
         evaluation, so the matrix is the same to the bit. Each component is evaluated
         as a whole (its ``prepare`` included), never in part."""
         cols = np.unique(np.asarray(cols, dtype=np.intp))
-        blocks = [b for b in self.blocks if np.isin(b.gidx, cols).any()]
+        blocks = evaluation_units([b for b in self.blocks if np.isin(b.gidx, cols).any()])
         node_cols = np.concatenate((self._mix_flow, self._mix_hout, self._node_h))
         nodes = bool(np.isin(node_cols, cols).any())
 
@@ -430,9 +432,14 @@ class System:
 
         return F_cols
 
-    def _component_rows(self, t, y, yp, F, blocks) -> None:
-        """F[rows of each block] = its component's residual."""
-        for b in blocks:
+    def _component_rows(self, t, y, yp, F, units) -> None:
+        """F[rows of each unit] = its residual: a block's component alone
+        (``Component.residual``), a batch of alike components as one
+        (``batch.residual_into``, see ``evaluation_units``)."""
+        for b in units:
+            if type(b) is not ComponentBlock:
+                b.residual_into(t, y, yp, F)
+                continue
             r = b.comp.residual(
                 t,
                 LocalVector(y[b.gidx], b.index, b.modes),
@@ -546,6 +553,38 @@ class System:
             vals = b.comp.output_values(t, b.local(y), b.local(yp))
             row.append(np.asarray(vals, dtype=float))
         return np.concatenate(row)
+
+
+def evaluation_units(blocks) -> list:
+    """``blocks`` with alike components joined into batches: the blocks of components of
+    one class whose ``batch_key()`` is equal and not None become one unit,
+    ``type(component).batch(blocks)`` (e.g. ``dnasim.components.pipe.PipeBatch``), with
+    ``residual_into(t, y, yp, F)`` writing all their rows at once; the others stay
+    ``ComponentBlock``s, evaluated alone. A batch gives each row the value its
+    component's own ``residual`` gives, so which components are batched together (all
+    pipes of a plant, or the few of a Jacobian column group) changes no number."""
+    groups: dict = {}
+    order: list = []
+    for b in blocks:
+        key_of = getattr(b.comp, "batch_key", None)
+        key = key_of() if key_of is not None else None
+        if key is None:
+            order.append(b)
+            continue
+        group = groups.get((type(b.comp), key))
+        if group is None:
+            group = groups[(type(b.comp), key)] = []
+            order.append(group)
+        group.append(b)
+    units = []
+    for u in order:
+        if type(u) is not list:
+            units.append(u)
+        elif len(u) == 1:
+            units.append(u[0])
+        else:
+            units.append(type(u[0].comp).batch(u))
+    return units
 
 
 def _link_sources(plant) -> dict:
