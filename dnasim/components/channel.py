@@ -87,10 +87,10 @@ import numpy as np
 
 from dnasim.components.base import Equation, Switch, Variable
 from dnasim.components.physics import (
+    LMTD_NUMBA_MIN,
     M_EPS_REL,
     G,
     PropertyArrays,
-    LMTD_NUMBA_MIN,
     blend_to_own,
     friction_dp,
     lmtd,
