@@ -70,10 +70,14 @@ class PropertyArrays:
             self.p = None
             new_memo = getattr(medium, "states_memo", None)
             self.memo = new_memo() if new_memo is not None else None
-        if self.memo is not None:
-            lean = getattr(medium, "T_rho_u", None)
-            if lean is not None and type(p) is np.ndarray and p.ndim == 1:
+        lean = getattr(medium, "T_rho_u", None)
+        if lean is not None and type(p) is np.ndarray and p.ndim == 1:
+            # (T, rho, u) alone: IF97 water with its memo (the same compiled loop as
+            # ``states(..., memo=)``), an ideal gas's closed forms (a medium without
+            # memos: no point is worth remembering)
+            if self.memo is not None or not hasattr(medium, "states_memo"):
                 return lean(p, h, branch, self.memo)
+        if self.memo is not None:
             r = medium.states(p, h, branch=branch, memo=self.memo)
             return r.T, r.rho, r.u
         p = np.asarray(p, dtype=float)
