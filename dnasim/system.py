@@ -580,8 +580,6 @@ def evaluation_units(blocks) -> list:
     for u in order:
         if type(u) is not list:
             units.append(u)
-        elif len(u) == 1:
-            units.append(u[0])
         else:
             units.append(type(u[0].comp).batch(u))
     return units
