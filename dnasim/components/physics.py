@@ -211,6 +211,8 @@ def _logmean_positive(x, y):
     s = x + y
     d = (x - y) / s
     small = np.abs(d) < 1e-3
+    if not small.any():  # no pair nearly equal (the usual case): the closed form alone
+        return (x - y) / np.log(x / y)
     d2 = d * d
     series = 0.5 * s * (1.0 - d2 / 3.0 - 4.0 * d2 * d2 / 45.0)
     safe_x = np.where(small, 1.0, x)
@@ -304,11 +306,20 @@ def upwind_weight(m, eps):
         d = TAIL_REL * eps
         return 0.5 * (m + q) + d * d / (4.0 * math.sqrt(m * m + d * d))
     m = np.asarray(m, dtype=float)
-    x = m / eps
-    x2 = x * x
-    q = np.where(np.abs(x) >= 1.0, np.abs(m), eps * (0.375 + 0.75 * x2 - 0.125 * x2 * x2))
+    q = _q(m, eps)
     d = TAIL_REL * eps
     return 0.5 * (m + q) + d * d / (4.0 * np.sqrt(m * m + d * d))
+
+
+def _q(m, eps):
+    """q(m) of ``upwind_weight`` for an array m [kg/s]: |m| outside the band, the
+    polynomial inside; when every flow is outside (the usual case) |m| alone."""
+    x = m / eps
+    outside = np.abs(x) >= 1.0
+    if outside.all():
+        return np.abs(m)
+    x2 = x * x
+    return np.where(outside, np.abs(m), eps * (0.375 + 0.75 * x2 - 0.125 * x2 * x2))
 
 
 def upwind_weight_pair(m, eps):
@@ -316,9 +327,7 @@ def upwind_weight_pair(m, eps):
     bit-identical to two calls (q and the tail are even in m, and (-m) + q == q - m
     exactly in floating point), for half the array operations."""
     m = np.asarray(m, dtype=float)
-    x = m / eps
-    x2 = x * x
-    q = np.where(np.abs(x) >= 1.0, np.abs(m), eps * (0.375 + 0.75 * x2 - 0.125 * x2 * x2))
+    q = _q(m, eps)
     d = TAIL_REL * eps
     tail = d * d / (4.0 * np.sqrt(m * m + d * d))
     return 0.5 * (m + q) + tail, 0.5 * (q - m) + tail
