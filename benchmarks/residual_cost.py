@@ -11,8 +11,8 @@ arguments, in order), then replayed ``--repeat`` times; the best replay gives
 * us per whole-plant residual (``residual``) and per column-group residual (the FD
   Jacobian's partial evaluations), CPU time (``time.process_time`` around each call);
 * with ``--components``: us per component and evaluation (each component's share of a
-  whole-plant residual, from a replay of those calls alone, timed per component) and
-  the node equations;
+  whole-plant residual, from a replay of those calls alone, timed per evaluation unit:
+  a component, or a batch of pipes) and the node equations;
 * the whole run in process (load, compile, simulate; no output files), best CPU seconds
   of ``--repeat`` runs, with its counts (steps, residual evaluations, Jacobians).
 
@@ -117,17 +117,31 @@ def replay(system, calls):
 
 
 def component_times(system, calls):
-    """{name: CPU s} over the whole-plant calls: each component's residual timed alone
-    (the System's ``component_times`` when it has one), and "nodes"."""
-    timer = getattr(system, "component_times", None)
-    if timer is None:
-        return None
-    out = {}
+    """{unit: CPU s} over the whole-plant calls: each evaluation unit alone (a
+    component, or a batch of pipes joined with "+"; ``System.residual_units`` where the
+    System has them, else its blocks), and "nodes" (the node equations)."""
+    from dnasim.errors import ResidualDomainError
+
+    clock = time.process_time
+    units = getattr(system, "residual_units", system.blocks)
+    names = [u.comp.name if hasattr(u, "comp") else "+".join(u.names) for u in units]
+    out = dict.fromkeys(names + ["nodes"], 0.0)
+    F = np.empty(system.n_equations)
     system.reset_modes()
     for c in calls:
-        if c[0] == "full":
-            for name, dt in timer(c[1], c[2], c[3]).items():
-                out[name] = out.get(name, 0.0) + dt
+        if c[0] != "full":
+            continue
+        _, t, y, yp = c
+        for name, u in zip(names, units, strict=True):
+            a = clock()
+            try:
+                system._component_rows(t, y, yp, F, [u])
+            except ResidualDomainError:
+                pass
+            out[name] += clock() - a
+        a = clock()
+        system._node_rows(y, F)
+        out["nodes"] += clock() - a
     return out
 
 
@@ -165,12 +179,9 @@ def main(argv=None):
         )
         if args.components:
             ct = component_times(system, calls)
-            if ct is None:
-                print(f"{path}: this System has no component_times()")
-            else:
-                print(f"{path}: us per component and whole-plant evaluation ({n_full} calls)")
-                for name, dt in sorted(ct.items(), key=lambda kv: -kv[1]):
-                    print(f"    {name:<20} {1e6 * dt / n_full:8.1f}")
+            print(f"{path}: us per component and whole-plant evaluation ({n_full} calls)")
+            for name, dt in sorted(ct.items(), key=lambda kv: -kv[1]):
+                print(f"    {name:<28} {1e6 * dt / n_full:8.1f}")
     print(
         f"{'plant':<20} {'n':>4} {'us/residual':>11} {'calls':>6} {'us/column F':>11} "
         f"{'calls':>6} {'run CPU s':>9} {'steps':>6} {'F evals':>7} {'Jacs':>5}"

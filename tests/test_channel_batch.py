@@ -16,6 +16,7 @@ from dnasim.compiler import compile as compile_plant
 from dnasim.plantfile import loads
 from dnasim.solver.linear_algebra import SQRT_EPS, IterationMatrix
 from dnasim.start import initial_values
+from dnasim.system import evaluation_units
 
 PLANT = """
 [plant]
@@ -118,6 +119,16 @@ def test_batched_partial_jacobian_equals_whole_evaluations_of_each_pipe():
         f0 = system.residual(0.0, y, yp)
         matrices.append(m.finite_difference(0.0, y, yp, f0, inc, 1.0, 37.0))
     partial, whole = matrices
+    # some column groups touch only some of the pipes: sub-batches were evaluated
+    sub = [
+        len(u.names)
+        for cols in IterationMatrix(
+            batched.residual, batched.n, sparsity=batched.jac_sparsity
+        ).groups
+        for u in evaluation_units([b for b in batched.blocks if np.isin(b.gidx, cols).any()])
+        if hasattr(u, "names")
+    ]
+    assert min(sub) < 3 == max(sub)
     assert np.array_equal(partial.indices, whole.indices)
     assert np.array_equal(partial.data, whole.data)
     assert np.count_nonzero(whole.data) > whole.nnz // 2  # a matrix, not zeros
