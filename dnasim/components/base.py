@@ -677,7 +677,7 @@ class Component:
                     f"component '{self.name}' ({type(self).__name__}): equation '{e.name}' "
                     f"returned {np.size(r)} residuals but declares {n}"
                 )
-            out[k : k + n] = r
+            out[k : k + n] = r if np.ndim(r) <= 1 else np.ravel(r)
             k += n
         return out
 

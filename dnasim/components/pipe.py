@@ -352,8 +352,9 @@ class Pipe(Component):
     def batch_key(self):
         """Pipes with equal keys are evaluated together, as one vectorised block over the
         plant-wide vectors (``PipeBatch``, made by ``dnasim.system``): alike channels
-        (``Channel.batch_key``) and no layered wall model; None: alone."""
-        if self.wall_model is not None:
+        (``Channel.batch_key``) and no layered wall model; None: alone (also for a
+        subclass, which may change the equations)."""
+        if type(self) is not Pipe or self.wall_model is not None:
             return None
         key = self.channel.batch_key()
         return None if key is None else ("Pipe", *key)
