@@ -53,6 +53,14 @@ so the energy leaving one component through a node equals the energy entering
 the others, to round-off, in forward, reverse and zero flow. The design
 direction of a port is only the sign convention of its flow variable.
 
+Evaluation: ``residual`` runs over ``residual_units`` (``evaluation_units``): each
+component alone (``Component.residual`` on its ``LocalVector``), or the components of
+a class that offers batches (``batch_key()``, ``batch(blocks)``: the library's
+``Pipe``) with one key together, as one vectorised block over the plant-wide vectors
+(``dnasim.components.pipe.PipeBatch``), which gives every row the same number to the
+bit. The finite-difference Jacobian's partial evaluations (``residual_for_columns``)
+batch the components a column group touches the same way.
+
 Sparsity: from the components' ``Equation`` declarations (``y`` and ``yp``
 lists) and the node equations; ``pattern_y`` (dF/dy), ``pattern_yp`` (dF/dy')
 and their union ``jac_sparsity``. A variable is differential when some
