@@ -440,7 +440,10 @@ class PipeBatch:
     equations over all their volumes, gathered from and written into the plant-wide
     vectors through index arrays made once. Each pipe's states go to its own property
     call (``Channel.state_properties``: its memo and phase modes), so every row is the
-    one ``Pipe.residual`` gives, to the bit (tests/test_channel_batch.py).
+    one ``Pipe.residual`` gives, to the bit (tests/test_channel_batch.py). The wall rows
+    restate ``Pipe.equations``' one-line wall residuals (T_w - T_wall(t), T_w - T_i,
+    C_i dT_w/dt - Q, dQ_passed/dt - sum Q) over the batch's volumes; that test holds
+    them to the bit too.
 
     ``blocks``: the System's ``ComponentBlock`` of each pipe (component, local -> global
     indices ``gidx``, local names ``index``, rows ``eq_slice``, discrete ``modes``)."""
