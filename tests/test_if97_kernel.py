@@ -667,3 +667,20 @@ def test_lean_memo_call_is_the_memo_call_bit_for_bit():
     with pytest.raises(PropertyError) as full_err:
         water.states(p_bad, h_bad, memo=water.states_memo())
     assert str(lean_err.value) == str(full_err.value)
+
+
+def test_lean_memo_call_uses_the_loaded_specialisation():
+    """numba compiles the memo loop once per argument type, writability included: the
+    lean call must pass the read-only branch codes ph_arrays passes, or every process
+    would load (and a new machine compile, about 10 s) a second specialisation."""
+    code = (
+        "import numpy as np; from dnasim.media import get_medium; "
+        "from dnasim.media import if97_numba as NB; w = get_medium('Water'); "
+        "p, h = np.array([5e6, 6e6]), np.array([3.2e6, 1.0e6]); "
+        "w.T_rho_u(p, h, None, w.states_memo()); "
+        "w.T_rho_u(p, h, np.array([3, 1]), w.states_memo()); "
+        "w.states(p, h, memo=w.states_memo()); "
+        "print(len(NB._ph_memo_loop.signatures) if NB.available() else 1)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "1"

@@ -853,7 +853,7 @@ class PhMemo:
 
     def scratch(self, n):
         """Output arrays for ``ph_memo_T_rho_u``'s unused fields (s, cp, x, drho_dp_h,
-        drho_dh_p, region), its status array, and n AUTO branch codes (zeros)."""
+        drho_dh_p, region), its status array, and n AUTO branch codes (zeros, read-only)."""
         out = self.__dict__.get("_scratch")
         if out is None or out[0].size != n:
             f = [np.empty(n) for _ in range(5)]
@@ -861,7 +861,7 @@ class PhMemo:
                 *f,
                 np.empty(n, dtype=np.int8),
                 np.empty(n, dtype=np.int8),
-                np.zeros(n, dtype=np.int64),
+                _read_only(np.zeros(n, dtype=np.int64)),
             )
         return out
 
@@ -878,9 +878,22 @@ def ph_memo_T_rho_u(p, h, branch, memo):
     n = p.size
     scratch = memo.scratch(n)
     T, rho, u = np.empty(n), np.empty(n), np.empty(n)
-    branch = scratch[-1] if branch is None else np.ascontiguousarray(branch, dtype=np.int64)
+    if branch is None:
+        branch = scratch[-1]
+    else:  # read-only, as ``ph_arrays`` passes it (``_read_only``)
+        branch = _read_only(np.ascontiguousarray(branch, dtype=np.int64))
     memo.computed = _ph_memo_loop(p, h, branch, *memo.arrays(n), T, rho, u, *scratch[:-1])
     return T, rho, u, scratch[-2]
+
+
+def _read_only(a):
+    """A read-only view of a: the branch codes ``ph_arrays`` hands the memo loop are a
+    read-only view (``np.broadcast_to``), and numba compiles one specialisation per
+    writability; ``ph_memo_T_rho_u`` passes the same kind, so both use the one that
+    ``dnasim.media.if97`` loads at start (not a second one to compile and load)."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
 
 
 def ph_arrays(p, h, branch=None, memo=None) -> K.PhResult:
