@@ -53,6 +53,14 @@ so the energy leaving one component through a node equals the energy entering
 the others, to round-off, in forward, reverse and zero flow. The design
 direction of a port is only the sign convention of its flow variable.
 
+Evaluation: ``residual`` runs over ``residual_units`` (``evaluation_units``): each
+component alone (``Component.residual`` on its ``LocalVector``), or the components of
+a class that offers batches (``batch_key()``, ``batch(blocks)``: the library's
+``Pipe``) with one key together, as one vectorised block over the plant-wide vectors
+(``dnasim.components.pipe.PipeBatch``), which gives every row the same number to the
+bit. The finite-difference Jacobian's partial evaluations (``residual_for_columns``)
+batch the components a column group touches the same way.
+
 Sparsity: from the components' ``Equation`` declarations (``y`` and ``yp``
 lists) and the node equations; ``pattern_y`` (dF/dy), ``pattern_yp`` (dF/dy')
 and their union ``jac_sparsity``. A variable is differential when some
@@ -356,6 +364,8 @@ class System:
         self.algebraic = ~self.differential
         self.quadrature = quadratures(self.pattern_y, self.pattern_yp)
         self._checked_lengths = False
+        #: what ``residual`` evaluates: the blocks, with alike components in batches
+        self.residual_units = evaluation_units(self.blocks)
 
         self.events = self._make_events()
 
@@ -396,7 +406,7 @@ class System:
     def residual(self, t, y, yp):
         """F(t, y, y') for the whole plant (length n)."""
         F = np.empty(self.n_equations)
-        self._component_rows(t, y, yp, F, self.blocks)
+        self._component_rows(t, y, yp, F, self.residual_units)
         self._node_rows(y, F)
         self._checked_lengths = True
         self._check_finite(t, F)
@@ -416,7 +426,7 @@ class System:
         evaluation, so the matrix is the same to the bit. Each component is evaluated
         as a whole (its ``prepare`` included), never in part."""
         cols = np.unique(np.asarray(cols, dtype=np.intp))
-        blocks = [b for b in self.blocks if np.isin(b.gidx, cols).any()]
+        blocks = evaluation_units([b for b in self.blocks if np.isin(b.gidx, cols).any()])
         node_cols = np.concatenate((self._mix_flow, self._mix_hout, self._node_h))
         nodes = bool(np.isin(node_cols, cols).any())
 
@@ -430,9 +440,14 @@ class System:
 
         return F_cols
 
-    def _component_rows(self, t, y, yp, F, blocks) -> None:
-        """F[rows of each block] = its component's residual."""
-        for b in blocks:
+    def _component_rows(self, t, y, yp, F, units) -> None:
+        """F[rows of each unit] = its residual: a block's component alone
+        (``Component.residual``), a batch of alike components as one
+        (``batch.residual_into``, see ``evaluation_units``)."""
+        for b in units:
+            if type(b) is not ComponentBlock:
+                b.residual_into(t, y, yp, F)
+                continue
             r = b.comp.residual(
                 t,
                 LocalVector(y[b.gidx], b.index, b.modes),
@@ -452,13 +467,17 @@ class System:
     def _node_rows(self, y, F) -> None:
         """F[node rows]: the mass balances sum_k n_k (the rows of ``node_matrix``,
         without the sparse-product call overhead) and the mixing equations."""
-        F[self.node_eq_start : self.node_eq_start + self.n_nodes] = np.bincount(
-            self._mix_node, weights=self._mix_sign * y[self._mix_flow], minlength=self.n_nodes
+        inflow = self._mix_sign * y[self._mix_flow]
+        start = self.node_eq_start
+        F[start : start + self.n_nodes] = np.bincount(
+            self._mix_node, weights=inflow, minlength=self.n_nodes
         )
-        F[self.node_eq_start + self.n_nodes :] = self.node_mixing(y)
+        F[start + self.n_nodes :] = self.node_mixing(y, inflow)
 
     def _check_finite(self, t, F) -> None:
-        if not np.isfinite(F).all():
+        # a sum is finite only when every term is (nan and inf propagate); a finite F
+        # whose sum overflows is looked at element by element
+        if not np.isfinite(F.sum()) and not np.isfinite(F).all():
             bad = np.flatnonzero(~np.isfinite(F))[:3]
             raise ResidualDomainError(
                 "residual not finite in "
@@ -466,9 +485,11 @@ class System:
                 + f" at t = {t:g}"
             )
 
-    def node_mixing(self, y) -> np.ndarray:
-        """Residuals of the nodes' mixing equations [W] (see the module docstring)."""
-        inflow = self._mix_sign * y[self._mix_flow]
+    def node_mixing(self, y, inflow=None) -> np.ndarray:
+        """Residuals of the nodes' mixing equations [W] (see the module docstring);
+        ``inflow``: the port flows into the nodes, sign * y[flow], when known."""
+        if inflow is None:
+            inflow = self._mix_sign * y[self._mix_flow]
         w = upwind_weight(inflow, self._mix_eps)
         terms = w * (y[self._mix_hout] - y[self._mix_hnode])
         return np.bincount(self._mix_node, weights=terms, minlength=self.n_nodes)
@@ -540,6 +561,36 @@ class System:
             vals = b.comp.output_values(t, b.local(y), b.local(yp))
             row.append(np.asarray(vals, dtype=float))
         return np.concatenate(row)
+
+
+def evaluation_units(blocks) -> list:
+    """``blocks`` with alike components joined into batches: the blocks of components of
+    one class whose ``batch_key()`` is equal and not None become one unit,
+    ``type(component).batch(blocks)`` (e.g. ``dnasim.components.pipe.PipeBatch``), with
+    ``residual_into(t, y, yp, F)`` writing all their rows at once; the others stay
+    ``ComponentBlock``s, evaluated alone. A batch gives each row the value its
+    component's own ``residual`` gives, so which components are batched together (all
+    pipes of a plant, or the few of a Jacobian column group) changes no number."""
+    groups: dict = {}
+    order: list = []
+    for b in blocks:
+        key_of = getattr(b.comp, "batch_key", None)
+        key = key_of() if key_of is not None else None
+        if key is None:
+            order.append(b)
+            continue
+        group = groups.get((type(b.comp), key))
+        if group is None:
+            group = groups[(type(b.comp), key)] = []
+            order.append(group)
+        group.append(b)
+    units = []
+    for u in order:
+        if type(u) is not list:
+            units.append(u)
+        else:
+            units.append(type(u[0].comp).batch(u))
+    return units
 
 
 def _link_sources(plant) -> dict:

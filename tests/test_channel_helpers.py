@@ -65,3 +65,18 @@ def test_upwind_weight_pair_is_two_calls_bit_for_bit():
         wp, wm = physics.upwind_weight_pair(m, eps)
         np.testing.assert_array_equal(wp, physics.upwind_weight(m, eps))
         np.testing.assert_array_equal(wm, physics.upwind_weight(-m, eps))
+
+
+def test_upwind_weight_of_an_array_is_the_scalar_formula_bit_for_bit():
+    """The array path (which skips the band polynomial when every flow is outside the
+    band) gives each element the number of the scalar path (Python floats, the same
+    operations), for arrays all outside the band, all inside, and mixed."""
+    rng = np.random.default_rng(9)
+    eps = 2e-2
+    for scale in (1e-3, 1e-2, 1.0, 50.0):  # inside, mixed, outside, far outside
+        m = rng.standard_normal(40) * scale
+        m[::11] = 0.0 if scale < 1.0 else m[::11]
+        w = physics.upwind_weight(m, eps)
+        assert list(w) == [physics.upwind_weight(float(v), eps) for v in m]
+        wp, wm = physics.upwind_weight_pair(m, eps)
+        assert list(wp) == list(w) and list(wm) == list(physics.upwind_weight(-m, eps))

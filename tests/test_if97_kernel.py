@@ -631,3 +631,56 @@ def test_memo_reproduces_a_point_moved_and_moved_back():
         assert m.computed == 0
         for f in ("T", "rho", "u", "s", "cp", "drho_dp_h", "drho_dh_p", "region", "status"):
             np.testing.assert_array_equal(getattr(back, f), getattr(base, f))
+
+
+def test_lean_memo_call_is_the_memo_call_bit_for_bit():
+    """IF97Water.T_rho_u (a residual's property call: T, rho, u only) gives the numbers
+    of states(..., memo=) on the same sequence of points, moved and unchanged, and
+    raises the same PropertyError for a state out of range."""
+    from dnasim.media import get_medium
+    from dnasim.media.errors import PropertyError
+
+    water = get_medium("Water")
+    if not water.phase_branches:
+        pytest.skip("compiled kernel only")
+    P, H = _grid()
+    P, H = P.ravel(), H.ravel()
+    m_full, m_lean = water.states_memo(), water.states_memo()
+    rng = np.random.default_rng(5)
+    branch = np.zeros(P.size, dtype=np.int64)
+    for k, rel in enumerate((0.0, 0.0, 1e-6, 1e-3, 0.0)):
+        P2 = P * (1.0 + rel * rng.standard_normal(P.size))
+        H2 = H * (1.0 + rel * rng.standard_normal(P.size))
+        ok = water.states(P2, H2, check=False).ok
+        P2, H2 = P2[ok], H2[ok]
+        if k == 0:
+            m_full, m_lean = water.states_memo(), water.states_memo()
+        b = branch[: P2.size] if k % 2 else None
+        full = water.states(P2, H2, branch=b, memo=m_full)
+        T, rho, u = water.T_rho_u(P2, H2, b, m_lean)
+        assert m_full.computed == m_lean.computed
+        for got, want in ((T, full.T), (rho, full.rho), (u, full.u)):
+            np.testing.assert_array_equal(got, want)
+    p_bad, h_bad = np.array([1e6, 1e6]), np.array([1e6, -9e5])  # T below 273.15 K
+    with pytest.raises(PropertyError) as lean_err:
+        water.T_rho_u(p_bad, h_bad, None, water.states_memo())
+    with pytest.raises(PropertyError) as full_err:
+        water.states(p_bad, h_bad, memo=water.states_memo())
+    assert str(lean_err.value) == str(full_err.value)
+
+
+def test_lean_memo_call_uses_the_loaded_specialisation():
+    """numba compiles the memo loop once per argument type, writability included: the
+    lean call must pass the read-only branch codes ph_arrays passes, or every process
+    would load (and a new machine compile, about 10 s) a second specialisation."""
+    code = (
+        "import numpy as np; from dnasim.media import get_medium; "
+        "from dnasim.media import if97_numba as NB; w = get_medium('Water'); "
+        "p, h = np.array([5e6, 6e6]), np.array([3.2e6, 1.0e6]); "
+        "w.T_rho_u(p, h, None, w.states_memo()); "
+        "w.T_rho_u(p, h, np.array([3, 1]), w.states_memo()); "
+        "w.states(p, h, memo=w.states_memo()); "
+        "print(len(NB._ph_memo_loop.signatures) if NB.available() else 1)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "1"

@@ -294,6 +294,28 @@ def test_ideal_gas_custom_and_errors():
         IdealGas("bad", R=1000.0, cp=900.0)
 
 
+def test_ideal_gas_lean_call_is_states_and_state_to_the_bit(air):
+    """T_rho_u (a residual's property call) gives the numbers of states() and of the
+    scalar state() (the same closed forms, each operation correctly rounded), and the
+    error of states() for a state with T <= 0 K."""
+    rng = np.random.default_rng(2)
+    p = 1e5 * (0.5 + rng.random(9))
+    h = 1e5 * (2.0 * rng.random(9) - 0.5)
+    T, rho, u = air.T_rho_u(p, h)
+    full = air.states(p, h)
+    for got, want in ((T, full.T), (rho, full.rho), (u, full.u)):
+        np.testing.assert_array_equal(got, want)
+    for i in range(p.size):
+        st = air.state(float(p[i]), float(h[i]))
+        assert (st.T, st.rho, st.u) == (T[i], rho[i], u[i])
+    bad = np.array([-1006.0 * 300.0])  # T = -26.85 K
+    with pytest.raises(PropertyError) as lean:
+        air.T_rho_u(np.array([1e5]), bad)
+    with pytest.raises(PropertyError) as whole:
+        air.states(np.array([1e5]), bad)
+    assert str(lean.value) == str(whole.value)
+
+
 def test_air_heos_is_real_gas_close_to_ideal(air):
     air_heos = get_medium("Air", backend="HEOS")
     assert isinstance(air_heos, CoolPropMedium)

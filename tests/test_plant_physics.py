@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 
-from dnasim.components.physics import friction_dp, lmtd, logarithmic_mean, valve_flow
+from dnasim.components.physics import friction_dp, lmtd, logarithmic_mean, softplus, valve_flow
 from dnasim.examples import attemperator_plant
 from dnasim.timefunctions import Table
 
@@ -39,6 +39,24 @@ def test_lmtd_is_finite_and_smooth_everywhere():
     assert np.max(np.abs(dL)) < 5.0
     # odd symmetry: heat flows the other way when both differences flip
     assert np.allclose(lmtd(-A, -B, 1.0), -L, atol=1e-12)
+
+
+def test_lmtd_is_its_definition_bit_for_bit_at_any_array_length():
+    # lmtd evaluates the four softplus values and the two logarithmic means of its
+    # definition in stacked arrays; each element must come out exactly as from the
+    # definition written out, and as when evaluated alone (a channel's volumes, or
+    # several channels' volumes at once, give each volume the same number)
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 4, 10, 33):
+        a = rng.normal(size=n) * 10.0 ** rng.uniform(-3, 3, size=n)
+        b = a + rng.normal(size=n) * 10.0 ** rng.uniform(-6, 2, size=n)
+        reg = 0.5
+        definition = logarithmic_mean(softplus(a, reg), softplus(b, reg)) - logarithmic_mean(
+            softplus(-a, reg), softplus(-b, reg)
+        )
+        assert np.array_equal(lmtd(a, b, reg), definition)
+        alone = np.array([lmtd(a[i : i + 1], b[i : i + 1], reg)[0] for i in range(n)])
+        assert np.array_equal(lmtd(a, b, reg), alone)
 
 
 def test_friction_and_valve_are_odd_with_finite_slope_at_zero():

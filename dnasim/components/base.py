@@ -663,24 +663,28 @@ class Component:
         declared = self.__dict__.get("_declared")
         if declared is None:
             declared = self._declared = self._declare_residuals()
-        eqs, functions = declared
+        eqs, functions, total = declared
         x.work = self.prepare(t, x, xp)
         if functions is not None:  # scalar equations only: one value each
             return np.array([f(t, x, xp) for f in functions], dtype=float)
-        out = []
+        out = np.empty(total)
+        k = 0
         for e in eqs:
-            r = np.asarray(e.residual(t, x, xp), dtype=float).reshape(-1)
-            if r.size != e.n_rows:
+            r = e.residual(t, x, xp)
+            n = e.n_rows
+            if np.size(r) != n:
                 raise PlantError(
                     f"component '{self.name}' ({type(self).__name__}): equation '{e.name}' "
-                    f"returned {r.size} residuals but declares {e.n_rows}"
+                    f"returned {np.size(r)} residuals but declares {n}"
                 )
-            out.append(r)
-        return np.concatenate(out)
+            out[k : k + n] = r if np.ndim(r) <= 1 else np.ravel(r)
+            k += n
+        return out
 
     def _declare_residuals(self):
-        """(equations, their residual functions when every one is scalar, else None),
-        made once per component (``residual``'s per-call work is the calls alone)."""
+        """(equations, their residual functions when every one is scalar, else None,
+        the number of rows), made once per component (``residual``'s per-call work is
+        the calls alone)."""
         eqs = self.equations()
         missing = [e.name for e in eqs if e.residual is None]
         if missing:
@@ -689,7 +693,8 @@ class Component:
                 f"{', '.join(missing)} declare no residual function"
             )
         scalar = all(e.size is None for e in eqs)
-        return eqs, (tuple(e.residual for e in eqs) if scalar else None)
+        total = sum(e.n_rows for e in eqs)
+        return eqs, (tuple(e.residual for e in eqs) if scalar else None), total
 
     def prepare(self, t: float, x: LocalVector, xp: LocalVector):
         """Hook: what several equations share, computed once per residual evaluation

@@ -87,12 +87,14 @@ import numpy as np
 
 from dnasim.components.base import Equation, Switch, Variable
 from dnasim.components.physics import (
+    LMTD_NUMBA_MIN,
     M_EPS_REL,
     G,
     PropertyArrays,
     blend_to_own,
     friction_dp,
     lmtd,
+    lmtd_numpy,
     saturation_enthalpies,
     upwind_mean_weighted,
     upwind_weight,
@@ -279,14 +281,30 @@ class Channel:
         With phase modes (``phase_modes``) each volume is evaluated on its mode's
         branch; the outlet node, whose state is the last volume's, on the last
         volume's branch; the inlet node as usual."""
-        p = np.concatenate(([x[f"{self.inlet}.p"]], x[self.pv], [x[f"{self.outlet}.p"]]))
-        h = np.concatenate(([x[f"{self.inlet}.h"]], x[self.hv], [x[f"{self.outlet}.h"]]))
-        mode = x.modes.get(self.phase_key) if self.phase_modes else None
+        p_at, h_at = self._state_positions(x.index)
+        p = x.data[p_at]
+        h = x.data[h_at]
+        T, rho, u = self.state_properties(medium, p, h, x.modes)
+        return p, h, T, rho, u
+
+    def state_properties(self, medium, p, h, modes):
+        """(T, rho, u) of the n + 2 states at p, h (``evaluate``); ``modes``: the
+        component's discrete modes (the phase branch of each volume)."""
+        mode = modes.get(self.phase_key) if self.phase_modes else None
         branch = None
         if mode is not None:
             branch = np.concatenate(([0], mode, mode[-1:]))
-        T, rho, u = self._props(medium, p, h, branch)
-        return p, h, T, rho, u
+        return self._props(medium, p, h, branch)
+
+    def _state_positions(self, index):
+        """Positions of p and h of the states S_0..S_{n+1} in the component's local
+        vector (``index``: its local name -> position map), found once per layout."""
+        cached = self.__dict__.get("_positions")
+        if cached is None or cached[0] is not index:
+            p_at = [index[self.state_names(j)[0]] for j in range(self.n + 2)]
+            h_at = [index[self.state_names(j)[1]] for j in range(self.n + 2)]
+            cached = self._positions = (index, np.array(p_at), np.array(h_at))
+        return cached[1], cached[2]
 
     def inflow_weights(self, m):
         """(a, b): weights of the left and right neighbour in the inflow state of each
@@ -305,56 +323,25 @@ class Channel:
     def blocks(self, x, xp, props, T_wall):
         """The residual of each equation of ``equations()`` by its name (prefix
         included): six arrays of n, and "outlet_pressure" an array of one."""
+        rows = self.__dict__.get("_rows")
+        if rows is None:
+            rows = self._rows = ChannelRows([self])
         p, h, T, rho, u = props
-        m = x[self.m]
-        M = x[self.M]
-        U = x[self.U]
-        Q = x[self.Q]
-        dM = xp[self.M]
-        dU = xp[self.U]
-        # the upwind weights of every face, once: wp = w(m[j]), wm = w(-m[j])
-        wp, wm = upwind_weight_pair(m, self.m_eps)
-        E = wp * h[:-1] - wm * h[1:]  # face_energy
-        mass = dM - (m[:-1] - m[1:])
-        energy = dU - (E[:-1] - E[1:] - Q)
-        density = M - self.V_i * rho[1:-1]
-        a, b = wp[:-1], wm[1:]  # inflow_weights
-        if self.mean or self.heat_transfer != "outlet":
-            c = blend_to_own(a, b, self.m_eps)
-            s = a + b + c
-            T_a = (a * T[:-2] + b * T[2:] + c * T[1:-1]) / s
-        if self.mean:
-            u_a = (a * u[:-2] + b * u[2:] + c * u[1:-1]) / s
-            internal = U - M * 0.5 * (u_a + u[1:-1])
-        else:
-            internal = U - M * u[1:-1]
-        T_i = T[1:-1]
-        if self.heat_transfer == "lmtd":
-            dT = lmtd(T_a - T_wall, T_i - T_wall, self.dT_reg)
-        elif self.heat_transfer == "outlet":
-            dT = T_i - T_wall
-        else:  # "mean"
-            dT = 0.5 * (T_a + T_i) - T_wall
-        kA = self.kA_i
-        if self.kA_exponent:
-            from dnasim.components.walls import flow_scaled_kA
-
-            kA = flow_scaled_kA(kA, 0.5 * (m[:-1] + m[1:]), self.m_kA, self.kA_exponent, self.m_reg)
-        heat = Q - kA * dT
-        mf = m[:-1]
-        rho_f = upwind_mean_weighted(wp[:-1], wm[:-1], rho[:-2], rho[1:-1])
-        momentum = p[:-2] - p[1:-1] - self.friction(mf, rho_f) - rho_f * G * self.dz_i
-        outlet_pressure = np.array([p[-1] - p[-2]])
+        values = rows.residuals(
+            p, h, T, rho, u, x[self.m], x[self.M], x[self.U], x[self.Q], xp[self.M], xp[self.U],
+            T_wall,
+        )  # fmt: skip
         P = self.prefix
-        return {
-            P + "mass": mass,
-            P + "energy": energy,
-            P + "density": density,
-            P + "internal_energy": internal,
-            P + "heat": heat,
-            P + "momentum": momentum,
-            P + "outlet_pressure": outlet_pressure,
-        }
+        return {P + name: v for name, v in zip(ChannelRows.NAMES, values, strict=True)}
+
+    def batch_key(self):
+        """Channels with equal keys can be evaluated as one (``ChannelRows`` of several):
+        the same equations (internal energy, heat transfer law, adiabatic or not,
+        friction law); None for a channel that cannot (flow-dependent kA, or
+        ``physics.LMTD_NUMBA_MIN`` volumes or more, whose LMTD is compiled)."""
+        if self.kA_exponent or self.n >= LMTD_NUMBA_MIN:
+            return None
+        return (self.mean, self.heat_transfer, self.kA_i == 0.0, self.k_i is not None)
 
     def use_phase_modes(self) -> None:
         """Evaluate each volume on its phase branch, kept as a discrete mode between
@@ -472,3 +459,126 @@ class Channel:
         x[self.U] = self.V_i * rho[1:-1] * (0.5 * (u_a + u[1:-1]) if self.mean else u[1:-1])
         x[self.Q] = 0.0
         return T[1:-1]
+
+
+class ChannelRows:
+    """The residual blocks of the module doc, vectorised over one channel or over several
+    alike channels (equal ``Channel.batch_key``) laid end to end.
+
+    The arrays handed to ``residuals`` hold the channels one after the other: the states
+    S_0..S_{n+1} of each (p, h, T, rho, u), its n + 1 face flows m, its n volumes (M,
+    U, Q, dM/dt, dU/dt, T_wall). The index sets below pick, for every face, its left and
+    right state, and for every volume its inflow and outflow face and its left, own and
+    right state; for one channel they are slices (h[:-1], h[1:], ...). The per-channel
+    constants (V_i, k_i or c_i, dz_i, kA_i, m_eps, m_reg, dT_reg) are numbers for one
+    channel and arrays over the faces or volumes for several. Every element goes through
+    the same operations in either case, so a channel's rows are the same to the bit alone
+    and in a batch (tests/test_channel_batch.py)."""
+
+    NAMES = (
+        "mass",
+        "energy",
+        "density",
+        "internal_energy",
+        "heat",
+        "momentum",
+        "outlet_pressure",
+    )
+
+    def __init__(self, channels):
+        ch = channels[0]
+        self.mean, self.heat_transfer = ch.mean, ch.heat_transfer
+        self.friction_k = ch.k_i is not None
+        self.kA_exponent, self.m_kA = ch.kA_exponent, ch.m_kA
+        self.adiabatic = ch.kA_i == 0.0 and not ch.kA_exponent
+        if len(channels) == 1:
+            self.face_left, self.face_right = slice(None, -1), slice(1, None)
+            self.v_in, self.v_out = slice(None, -1), slice(1, None)
+            self.left, self.own, self.right = slice(None, -2), slice(1, -1), slice(2, None)
+            self.last, self.outlet_node = slice(-2, -1), slice(-1, None)
+            self.V_i, self.k_i, self.c_i = ch.V_i, ch.k_i, ch.c_i
+            self.dz_i, self.kA_i, self.m_reg, self.dT_reg = ch.dz_i, ch.kA_i, ch.m_reg, ch.dT_reg
+            self.eps_face = self.eps_volume = ch.m_eps
+            self.lmtd = lmtd  # compiled from LMTD_NUMBA_MIN volumes on
+            return
+        if len({c.batch_key() for c in channels}) != 1 or None in {c.batch_key() for c in channels}:
+            raise ValueError("ChannelRows: channels with different equations")
+        idx = {k: [] for k in ("fl", "fr", "vi", "vo", "l", "o", "r", "last", "on")}
+        s0 = f0 = 0  # first state and first face of the channel
+        for c in channels:
+            n, vol = c.n, np.arange(c.n)
+            idx["fl"].append(s0 + np.arange(n + 1))
+            idx["fr"].append(s0 + 1 + np.arange(n + 1))
+            idx["vi"].append(f0 + vol)
+            idx["vo"].append(f0 + 1 + vol)
+            idx["l"].append(s0 + vol)
+            idx["o"].append(s0 + 1 + vol)
+            idx["r"].append(s0 + 2 + vol)
+            idx["last"].append([s0 + n])
+            idx["on"].append([s0 + n + 1])
+            s0 += n + 2
+            f0 += n + 1
+        cat = {k: np.concatenate(v).astype(np.intp) for k, v in idx.items()}
+        self.face_left, self.face_right = cat["fl"], cat["fr"]
+        self.v_in, self.v_out = cat["vi"], cat["vo"]
+        self.left, self.own, self.right = cat["l"], cat["o"], cat["r"]
+        self.last, self.outlet_node = cat["last"], cat["on"]
+
+        def per_volume(attr):
+            return np.concatenate([np.full(c.n, getattr(c, attr)) for c in channels])
+
+        self.V_i, self.dz_i, self.kA_i = per_volume("V_i"), per_volume("dz_i"), per_volume("kA_i")
+        self.m_reg, self.dT_reg = per_volume("m_reg"), per_volume("dT_reg")
+        self.k_i = per_volume("k_i") if self.friction_k else None
+        self.c_i = None if self.friction_k else per_volume("c_i")
+        self.eps_volume = per_volume("m_eps")
+        self.eps_face = np.concatenate([np.full(c.n + 1, c.m_eps) for c in channels])
+        # numpy's, as each channel alone (fewer than LMTD_NUMBA_MIN volumes: batch_key)
+        self.lmtd = lmtd_numpy
+
+    def residuals(self, p, h, T, rho, u, m, M, U, Q, dM, dU, T_wall):
+        """The seven blocks of ``NAMES`` (module doc), in that order."""
+        # the upwind weights of every face, once: wp = w(m[j]), wm = w(-m[j])
+        wp, wm = upwind_weight_pair(m, self.eps_face)
+        E = wp * h[self.face_left] - wm * h[self.face_right]  # face_energy
+        mass = dM - (m[self.v_in] - m[self.v_out])
+        energy = dU - (E[self.v_in] - E[self.v_out] - Q)
+        own = self.own
+        density = M - self.V_i * rho[own]
+        a, b = wp[self.v_in], wm[self.v_out]  # inflow_weights
+        # no heat transfer (kA = 0, adiabatic): Q[i] = kA_i dT = 0 needs no dT (Q - 0 dT
+        # is Q for every finite dT)
+        if self.mean or (self.heat_transfer != "outlet" and not self.adiabatic):
+            c = blend_to_own(a, b, self.eps_volume)
+            s = a + b + c
+            T_a = (a * T[self.left] + b * T[self.right] + c * T[own]) / s
+        if self.mean:
+            u_a = (a * u[self.left] + b * u[self.right] + c * u[own]) / s
+            internal = U - M * 0.5 * (u_a + u[own])
+        else:
+            internal = U - M * u[own]
+        T_i = T[own]
+        if self.adiabatic:
+            dT = 0.0
+        elif self.heat_transfer == "lmtd":
+            dT = self.lmtd(T_a - T_wall, T_i - T_wall, self.dT_reg)
+        elif self.heat_transfer == "outlet":
+            dT = T_i - T_wall
+        else:  # "mean"
+            dT = 0.5 * (T_a + T_i) - T_wall
+        kA = self.kA_i
+        if self.kA_exponent:
+            from dnasim.components.walls import flow_scaled_kA
+
+            mv = 0.5 * (m[self.v_in] + m[self.v_out])
+            kA = flow_scaled_kA(kA, mv, self.m_kA, self.kA_exponent, self.m_reg)
+        heat = Q - kA * dT
+        mf = m[self.v_in]
+        rho_f = upwind_mean_weighted(a, wm[self.v_in], rho[self.left], rho[own])
+        if self.friction_k:
+            friction = friction_dp(self.k_i, mf, rho_f, self.m_reg)
+        else:
+            friction = self.c_i * mf * np.sqrt(mf * mf + self.m_reg * self.m_reg)
+        momentum = p[self.left] - p[own] - friction - rho_f * G * self.dz_i
+        outlet_pressure = p[self.outlet_node] - p[self.last]
+        return mass, energy, density, internal, heat, momentum, outlet_pressure

@@ -48,7 +48,7 @@ class _Junction(Component):
                 y=flows,
                 unit="kg/s",
                 doc="sum_k m_k = 0 (m_k into the junction)",
-                residual=lambda t, x, xp: self.flows_in(x).sum(),
+                residual=lambda t, x, xp: x.work.sum(),
             ),
             Equation(
                 "mixing",
@@ -70,10 +70,16 @@ class _Junction(Component):
         ]
         return eqs
 
+    def prepare(self, t, x, xp):
+        """The flows into the junction (``flows_in``), once per evaluation (``x.work``)."""
+        return self.flows_in(x)
+
     def _mixing(self, t, x, xp):
-        m = self.flows_in(x)
-        h = np.array([x[f"{p}.h"] for p in self.port_names()])
-        return np.dot(upwind_weight(m, self.m_eps), h - x["h_mix"])
+        h_names = self.__dict__.get("_h_names")
+        if h_names is None:
+            h_names = self._h_names = [f"{p}.h" for p in self.port_names()]
+        h = np.array([x[name] for name in h_names])
+        return np.dot(upwind_weight(x.work, self.m_eps), h - x["h_mix"])
 
     def initial_guess(self, t0, x):
         ports = self.port_names()

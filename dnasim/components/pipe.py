@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
-from dnasim.components.channel import Channel
+from dnasim.components.channel import Channel, ChannelRows
 from dnasim.components.physics import (
     DT_Q_NOMINAL,
     M_REG_REL,
@@ -349,6 +349,21 @@ class Pipe(Component):
             )
         return eqs
 
+    def batch_key(self):
+        """Pipes with equal keys are evaluated together, as one vectorised block over the
+        plant-wide vectors (``PipeBatch``, made by ``dnasim.system``): alike channels
+        (``Channel.batch_key``) and no layered wall model; None: alone (also for a
+        subclass, which may change the equations)."""
+        if type(self) is not Pipe or self.wall_model is not None:
+            return None
+        key = self.channel.batch_key()
+        return None if key is None else ("Pipe", *key)
+
+    @staticmethod
+    def batch(blocks):
+        """The ``PipeBatch`` of the System blocks of pipes with one ``batch_key``."""
+        return PipeBatch(blocks)
+
     def prepare(self, t, x, xp):
         """One property call for the n + 2 states, then every channel block."""
         props = self.channel.evaluate(self.medium, x)
@@ -417,3 +432,105 @@ class Pipe(Component):
             x["T_w"] = P["T_wall0"]
         else:
             x["T_w"] = T
+
+
+class PipeBatch:
+    """The residual rows of several pipes with one ``Pipe.batch_key``, evaluated as one:
+    the channel blocks by ``ChannelRows`` over the pipes laid end to end, the wall
+    equations over all their volumes, gathered from and written into the plant-wide
+    vectors through index arrays made once. Each pipe's states go to its own property
+    call (``Channel.state_properties``: its memo and phase modes), so every row is the
+    one ``Pipe.residual`` gives, to the bit (tests/test_channel_batch.py). The wall rows
+    restate ``Pipe.equations``' one-line wall residuals (T_w - T_wall(t), T_w - T_i,
+    C_i dT_w/dt - Q, dQ_passed/dt - sum Q) over the batch's volumes; that test holds
+    them to the bit too.
+
+    ``blocks``: the System's ``ComponentBlock`` of each pipe (component, local -> global
+    indices ``gidx``, local names ``index``, rows ``eq_slice``, discrete ``modes``)."""
+
+    def __init__(self, blocks):
+        self.blocks = list(blocks)
+        self.names = tuple(b.comp.name for b in self.blocks)
+        pipes = [b.comp for b in self.blocks]
+        self.channel_rows = ChannelRows([pipe.channel for pipe in pipes])
+
+        def at(b, name):
+            k = b.index[name]
+            return b.gidx[k] if isinstance(k, slice) else b.gidx[[k]]
+
+        def cat(parts):
+            return np.concatenate(parts).astype(np.intp)
+
+        p_at, h_at, self.segments, start = [], [], [], 0
+        for b in self.blocks:
+            pos_p, pos_h = b.comp.channel._state_positions(b.index)
+            p_at.append(b.gidx[pos_p])
+            h_at.append(b.gidx[pos_h])
+            self.segments.append(slice(start, start + b.comp.n + 2))
+            start += b.comp.n + 2
+        self.p_at, self.h_at = cat(p_at), cat(h_at)
+        self.m_at, self.M_at, self.U_at, self.Q_at, self.Tw_at = (
+            cat([at(b, name) for b in self.blocks]) for name in ("m", "M", "U", "Q", "T_w")
+        )
+        # the rows of each equation, pipe after pipe (each pipe's rows from eq_slice)
+        rows = {}
+        for b in self.blocks:
+            offset = b.eq_slice.start
+            for eq in b.comp.equations():
+                rows.setdefault(eq.name, []).append(offset + np.arange(eq.n_rows))
+                offset += eq.n_rows
+            if offset != b.eq_slice.stop:  # pragma: no cover - equations() changed
+                raise ValueError(f"PipeBatch: the rows of '{b.comp.name}' do not add up")
+        self.rows = [cat(rows[name]) for name in ChannelRows.NAMES]
+        # the wall equations, by kind: fixed T_wall(t), adiabatic (no wall), storage
+        volumes, v0 = [], 0
+        for b in self.blocks:
+            volumes.append(np.arange(v0, v0 + b.comp.n))
+            v0 += b.comp.n
+        kinds = {"fixed": [], "none": [], "storage": []}
+        for k, b in enumerate(self.blocks):
+            pipe = b.comp
+            kind = "fixed" if pipe.fixed_wall else "none" if pipe.no_wall else "storage"
+            kinds[kind].append(k)
+        self.walls = []
+        for kind, members in kinds.items():
+            if not members:
+                continue
+            vol = cat([volumes[k] for k in members])
+            wall_rows = cat([rows["wall"][k] for k in members])
+            self.walls.append((kind, [self.blocks[k].comp for k in members], vol, wall_rows))
+        self.n = {kind: [pipe.n for pipe in pipes] for kind, pipes, _, _ in self.walls}
+        self.fixed = [
+            (volumes[k], int(rows["heat_passed"][i][0]), int(at(self.blocks[k], "Q_passed")[0]))
+            for i, k in enumerate(kinds["fixed"])
+        ]
+        self.C_i = np.concatenate(
+            [np.full(b.comp.n, b.comp.params["C_wall"] / b.comp.n) for b in self.blocks]
+        )
+
+    def residual_into(self, t, y, yp, F) -> None:
+        """F[rows of the pipes] = their residuals at (t, y, y') (global vectors)."""
+        p = y[self.p_at]
+        h = y[self.h_at]
+        props = [
+            b.comp.channel.state_properties(b.comp.medium, p[seg], h[seg], b.modes)
+            for b, seg in zip(self.blocks, self.segments, strict=True)
+        ]
+        T, rho, u = (np.concatenate(v) for v in zip(*props, strict=True))
+        Q, T_w = y[self.Q_at], y[self.Tw_at]
+        M, U = self.M_at, self.U_at
+        values = self.channel_rows.residuals(
+            p, h, T, rho, u, y[self.m_at], y[M], y[U], Q, yp[M], yp[U], T_w
+        )
+        for rows, v in zip(self.rows, values, strict=True):
+            F[rows] = v
+        for kind, pipes, vol, rows in self.walls:
+            if kind == "fixed":  # T_w[i] = T_wall(t)
+                T_wall = np.repeat([pipe.param_at("T_wall", t) for pipe in pipes], self.n[kind])
+                F[rows] = T_w[vol] - T_wall
+            elif kind == "none":  # T_w[i] = T_i
+                F[rows] = T_w[vol] - T[self.channel_rows.own][vol]
+            else:  # C_i dT_w[i]/dt = Q[i]
+                F[rows] = self.C_i[vol] * yp[self.Tw_at[vol]] - Q[vol]
+        for vol, row, at_Q_passed in self.fixed:  # dQ_passed/dt = sum Q
+            F[row] = yp[at_Q_passed] - np.sum(Q[vol[0] : vol[-1] + 1])

@@ -34,7 +34,6 @@ pressures and, next to storage volumes, make the DAE index 2.
 from __future__ import annotations
 
 from dnasim.components.base import Component, Equation, FluidPort, Param, SignalPort, Variable
-from dnasim.components.physics import properties
 from dnasim.errors import PlantError
 
 __all__ = [
@@ -175,8 +174,9 @@ class TemperatureSensor(_NodeSensor):
         return 1.0
 
     def _q(self, t, x):
-        T, _, _ = properties(self.medium, [x["port.p"]], [x["port.h"]])
-        return T[0]
+        # one point: the medium's cached state (what ``physics.properties`` does for a
+        # single point, without the arrays)
+        return self.medium.state(x["port.p"], x["port.h"]).T
 
     def initial_guess(self, t0, x):
         T0 = self.params["T0"]

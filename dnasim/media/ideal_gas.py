@@ -160,5 +160,18 @@ class IdealGas(Medium):
             ok,
         )
 
+    def T_rho_u(self, p, h, branch=None, memo=None):
+        """(T [K], rho [kg/m3], u [J/kg]) arrays at 1-D float arrays p [Pa], h [J/kg]: the
+        numbers of :meth:`states` without its other fields, for a residual's property
+        call (``dnasim.components.physics.PropertyArrays``); ``branch`` and ``memo`` are
+        not used (no phase branches; nothing to remember for closed forms). Raises
+        :class:`PropertyError` as :meth:`states` does."""
+        T = self.T_ref + h / self.cp
+        if not ((p > 0.0) & (p < math.inf) & np.isfinite(h) & (T > 0.0)).all():
+            self.states(p, h)  # raises the error of the first bad state
+        rho = p / (self.R * T)
+        self.n_evaluations += p.size
+        return T, rho, h - p / rho
+
     def _compute_h_pT(self, p: float, T: float) -> float:
         return self.cp * (T - self.T_ref)

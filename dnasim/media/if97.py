@@ -130,6 +130,25 @@ class IF97Water(Medium):
             r.ok,
         )
 
+    def T_rho_u(self, p, h, branch, memo):
+        """(T [K], rho [kg/m3], u [J/kg]) arrays at 1-D float arrays p [Pa], h [J/kg]
+        with a :meth:`states_memo` (compiled kernel): the numbers of ``states(p, h,
+        branch=branch, memo=memo)`` without its other fields, for a residual's call
+        (``dnasim.components.physics.PropertyArrays``). Raises :class:`PropertyError`
+        for the first state out of range, as ``states`` does."""
+        T, rho, u, status = NB.ph_memo_T_rho_u(p, h, branch, memo)
+        if status.any():
+            i = int(np.flatnonzero(status)[0])
+            raise PropertyError(
+                self.label,
+                float(p[i]),
+                float(h[i]),
+                "state",
+                K.STATUS_TEXT.get(int(status[i]), "invalid state") + f" (state index {i})",
+            )
+        self.n_evaluations += memo.computed
+        return T, rho, u
+
     # ------------------------------------------------------------ h(p, T)
     def _compute_h_pT(self, p: float, T: float) -> float:
         if self.kernel == "numba":
