@@ -435,6 +435,7 @@ class Channel:
             size=2 * n,
             restart=True,
             names=names,
+            rearm=True,
             doc="phase mode of each volume: liquid <-> two-phase at h', two-phase <-> vapour "
             "at h''",
         )
