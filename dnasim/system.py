@@ -131,6 +131,7 @@ class PlantEvent:
         self.terminal = bool(getattr(switch, "terminal", False))
         self.restart = bool(getattr(switch, "restart", False))
         self.kink = bool(getattr(switch, "kink", False))
+        self.rearm = bool(getattr(switch, "rearm", False))
         self.size = int(getattr(switch, "size", 1) or 1)
         names = getattr(switch, "names", None)
         if self.size == 1:

@@ -111,3 +111,36 @@ def test_callback_streams_every_output_point():
         lambda t, y, yp: yp + y, (0, 1), [1.0], callback=lambda t, y, yp: seen.append(t)
     )
     assert seen == list(res.t)
+
+
+def test_a_crossing_lost_at_a_restart_is_still_acted_on():
+    """A switch whose new mode starts a little past its own zero, and moves further past.
+
+    y' = -1 from y = 1. Mode A: g = y - 0.5 fires at t = 0.5 and enters mode B, whose
+    g = y - 0.5 - 1e-9 is already -1e-9 at the restart and falls from there: there is
+    no sign change left to see. (On plants: a volume switched to two-phase whose
+    consistent state lands 1e-10 J/kg on the liquid side of h'; see
+    SwitchFunction.missed.) B must still fire, at the restart, and enter mode C.
+    Without the rule B never fires and the run ends in the wrong mode."""
+    modes = ["A"]
+    offset = {"A": 0.0, "B": -1e-9, "C": None}
+
+    def residual(t, y, yp):
+        return np.array([yp[0] + 1.0])
+
+    def g(t, y, yp):
+        off = offset[modes[-1]]
+        return 1.0 if off is None else y[0] - 0.5 + off
+
+    def action(t, y, yp):
+        modes.append({"A": "B", "B": "C"}[modes[-1]])
+
+    g.direction = -1
+    g.action = action
+    g.rearm = True  # each action starts a mode with its own g
+    res = solve_dae(residual, (0.0, 1.0), [1.0], [-1.0], events=[g], rtol=1e-8, atol=1e-10)
+    assert res.success
+    assert modes == ["A", "B", "C"]
+    # both fire at the located crossing of A, t = 0.5 to the location's few ulp
+    assert res.t_events[0] == pytest.approx([0.5, 0.5], abs=1e-12)
+    assert res.y[0, -1] == pytest.approx(0.0, abs=1e-8)  # y' = -1 is untouched by the modes

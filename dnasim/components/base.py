@@ -361,7 +361,10 @@ class Switch:
     terminal: stop the run at the crossing; ``message(t)`` then gives the plain
     reason (used by ``dnasim.results``). kink: g marks a kink of the residual (a
     phase line); the solver then takes finite differences on the side of the point
-    and cuts a failed step at the predicted crossing (``dnasim.solver``).
+    and cuts a failed step at the predicted crossing (``dnasim.solver``). rearm: the
+    action makes g positive again (a mode toggle whose new mode has its own g), so an
+    entry found past zero after a restart and moving further has crossed again
+    (``dnasim.solver.events.SwitchFunction.missed``).
     """
 
     name: str
@@ -375,6 +378,7 @@ class Switch:
     names: list | None = None
     message: Callable | None = None
     kink: bool = False
+    rearm: bool = False
 
 
 @dataclass(frozen=True)

@@ -483,6 +483,8 @@ def _predicted_crossing(solver, kinks, t_a, t_b):
             t_c = locate_earliest(values, sw, t_a, g_a, t_b, g_b)[0]
         except DAEError:
             continue
+        if t_c <= t_a:  # a missed crossing (SwitchFunction.missed): acted on after the step
+            continue
         best = t_c if best is None else min(best, t_c)
     return best
 

@@ -45,6 +45,9 @@ class SwitchFunction:
     point lies and cuts a step that failed in Newton at the crossing predicted on
     the last step's polynomial (``linear_algebra``, ``bdf``).
 
+    ``rearm = True`` (with an action): the action makes g positive again (a mode
+    toggle: the new mode has its own g); see ``missed``.
+
     A switch *restarts* (cut the step at the crossing, make consistent, restart
     at order 1) when it is terminal, has an action, or has ``restart = True``;
     otherwise it only observes (its crossings are located and logged).
@@ -61,6 +64,7 @@ class SwitchFunction:
     names: list = field(default_factory=list)
     restart_only: bool = False
     kink: bool = False
+    rearm: bool = False
 
     @classmethod
     def wrap(cls, g, index) -> SwitchFunction:
@@ -114,6 +118,7 @@ class SwitchFunction:
             names,
             bool(getattr(g, "restart", False)),
             bool(getattr(g, "kink", False)),
+            bool(getattr(g, "rearm", False)),
         )
 
     @property
@@ -145,7 +150,8 @@ class SwitchFunction:
         return v
 
     def crossed(self, g_old: np.ndarray, g_new: np.ndarray) -> np.ndarray:
-        """Per element: a sign change from g_old to g_new that its direction reports.
+        """Per element: a sign change from g_old to g_new that its direction reports,
+        or a missed one (``missed``).
 
         No change when g_old is exactly 0 (it left the switch) or g_new is exactly 0
         (not across yet; seen on the next step).
@@ -153,7 +159,29 @@ class SwitchFunction:
         change = (g_old != 0.0) & (g_new != 0.0) & (np.sign(g_old) != np.sign(g_new))
         rising = g_new > 0.0
         wanted = (self.direction == 0) | ((self.direction > 0) == rising)
-        return change & wanted
+        return (change & wanted) | self.missed(g_old, g_new)
+
+    def missed(self, g_old: np.ndarray, g_new: np.ndarray) -> np.ndarray:
+        """Per element of a directed, re-arming switch (``rearm``): g_old already on (or at) the
+        side its direction reports, and g_new further on it. Such an element crossed at
+        the start of the step, where its sign was lost.
+
+        It happens after a restart: the crossing is located on the step's interpolant,
+        whose algebraic unknowns (a volume's h, say) are not exactly consistent with its
+        differential ones (M, U) between the step's ends, and the consistent state after
+        the action may sit a little past the line of the new mode. Measured on
+        tests/field/condensing_pipe.toml: a volume switched to two-phase landed 1.2e-10
+        J/kg on the liquid side of h', g_old = -1.2e-10; with a sign change required the
+        crossing back was never seen and the volume stayed on the two-phase branch 300
+        kJ/kg below the line, its mass growing to 138 kg in 2.5 L, exit 0.
+        Moving away from zero (not back towards it, as a PI controller's output that
+        reached its limit exactly does) is what marks it."""
+        if self.action is None or not self.rearm:
+            return np.zeros(np.shape(g_new), dtype=bool)
+        d = np.broadcast_to(self.direction, np.shape(g_new))
+        down = (d < 0) & (g_old <= 0.0) & (g_new < g_old)
+        up = (d > 0) & (g_old >= 0.0) & (g_new > g_old)
+        return down | up
 
 
 def _or_zero(v):
@@ -239,6 +267,11 @@ def locate_earliest(
     Returns (t_star, g(t_star), which, located element, iterates of that element),
     ``which`` the elements that crossed between t_a and t_star.
     """
+    missed = np.flatnonzero(sw.missed(g_a, g_b))
+    if missed.size:
+        # crossed where the step began (see SwitchFunction.missed): act there
+        k = int(missed[0])
+        return t_a, g_a, missed, k, [(t_a, float(g_a[k]))]
     while True:
         candidates = np.flatnonzero(sw.crossed(g_a, g_b))
         ga, gb = g_a[candidates], g_b[candidates]
