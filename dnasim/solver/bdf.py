@@ -182,6 +182,12 @@ class NordsieckBDF:
         self.fixed_order = fixed_order
         self.fixed_step = fixed_step
         self.z = np.zeros((nd.MAX_ORDER + 2, self.n))
+        # work arrays of the hot path (``step``): the predicted array and a product
+        self._z_pred = np.zeros_like(self.z)
+        self._z_work = np.zeros_like(self.z)
+        # masks of ones: the weights are used as they are (x * 1.0 == x, bit for bit)
+        self._error_all = bool(np.all(self.error_mask == 1.0))
+        self._norm_all = bool(np.all(self.norm_mask == 1.0))
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
         self.jacobian_current = False
         self.failure = StepFailure()
@@ -304,8 +310,8 @@ class NordsieckBDF:
         values from its left (a boundary that steps at t_stop, say).
         """
         weights = self.weights_for(self.y)
-        error_weights = weights * self.error_mask
-        newton_weights = weights * self.norm_mask
+        error_weights = weights if self._error_all else weights * self.error_mask
+        newton_weights = weights if self._norm_all else weights * self.norm_mask
         n_newton_fail = 0
         n_error_fail = 0
         reinitialized = False
@@ -329,7 +335,7 @@ class NordsieckBDF:
             else:
                 t_new = self.t + h
             self._check_step_size(h, t_new)
-            z_pred = nd.predict(self.z, q)
+            z_pred = nd.predict(self.z, q, out=self._z_pred)
             cj = nd.harmonic(q) / h
             t_res = np.nextafter(t_new, -np.inf) if (left_limit and t_new == t_stop) else t_new
             converged, y, yp, delta = self._correct(t_res, z_pred, cj, h, weights, newton_weights)
@@ -412,7 +418,7 @@ class NordsieckBDF:
         return eta
 
     def _check_step_size(self, h, t_new) -> None:
-        if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not np.isfinite(h):
+        if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not math.isfinite(h):
             raise DAEError(
                 self._failure_message(
                     t_new, h, f"the step size fell to round-off level (h = {h:.3g})"
@@ -421,7 +427,9 @@ class NordsieckBDF:
 
     def _accept(self, t_new, z_pred, delta, y, yp) -> None:
         q = self.q
-        self.z[: q + 1] = z_pred + nd.l_vector(q)[:, None] * delta
+        work = self._z_work[: q + 1]
+        np.multiply(nd.l_vector(q)[:, None], delta, out=work)
+        np.add(z_pred, work, out=self.z[: q + 1])  # z = z_pred + l Delta, in place
         self.t = t_new
         self.y = y
         self.yp = yp
