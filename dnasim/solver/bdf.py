@@ -21,6 +21,7 @@ Gear's Nordsieck BDF as in LSODE; see ``nordsieck.py`` for the algebra.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -48,6 +49,10 @@ ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
 # restart step from the solution (True) or IDA's rule (False, the default), see restart_step
 RESTART_FROM_SOLUTION = False
 RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_step
+# compiled loops of the step (``kernels``, bit-identical to the numpy code): at once when
+# numba is loaded in the process, else after this many steps of a run without a sparsity
+# pattern (numba's import pays only on long runs; plants without water never load it)
+KERNELS_AFTER_STEPS = 2000
 
 
 @dataclass
@@ -188,6 +193,16 @@ class NordsieckBDF:
         # masks of ones: the weights are used as they are (x * 1.0 == x, bit for bit)
         self._error_all = bool(np.all(self.error_mask == 1.0))
         self._norm_all = bool(np.all(self.norm_mask == 1.0))
+        self._dw = np.zeros(self.n)  # the weighted Newton update
+        self._w = np.zeros(self.n)  # the weights of the current step
+        self._kernels = None  # the ``kernels`` module once loaded
+        atol_ok = isinstance(atol, np.ndarray) and atol.shape == (self.n,)
+        if not atol_ok:
+            self._kernels_at = math.inf
+        elif "numba" in sys.modules:
+            self._kernels_at = 0
+        else:
+            self._kernels_at = math.inf if matrix.sparse else KERNELS_AFTER_STEPS
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
         self.jacobian_current = False
         self.failure = StepFailure()
@@ -309,7 +324,12 @@ class NordsieckBDF:
         an ulp before it: t_stop is a discontinuity and the step must see the
         values from its left (a boundary that steps at t_stop, say).
         """
-        weights = self.weights_for(self.y)
+        if self._kernels is None and self.stats.steps >= self._kernels_at:
+            self._load_kernels()
+        if self._kernels is not None:
+            weights = self._kernels.weights(self.y, self.rtol, self.atol, np.empty(self.n))
+        else:
+            weights = self.weights_for(self.y)
         error_weights = weights if self._error_all else weights * self.error_mask
         newton_weights = weights if self._norm_all else weights * self.norm_mask
         n_newton_fail = 0
@@ -367,6 +387,16 @@ class NordsieckBDF:
             self.h_used, self.q_used = h, q
             self._choose_next(error, delta, error_weights, failed_this_step)
             return
+
+    def _load_kernels(self) -> None:
+        """Import the compiled loops (``kernels``); without numba, go on in numpy."""
+        self._kernels_at = math.inf
+        try:
+            from dnasim.solver import kernels
+        except ImportError:  # pragma: no cover - numba is a dependency
+            return
+        kernels.warm()
+        self._kernels = kernels
 
     def _reinitialize(self, h: float) -> None:
         """Make the last accepted point consistent again and restart there at order 1.
@@ -605,14 +635,22 @@ class NordsieckBDF:
         self.newton_ss = max(self.newton_ss, c / (1.0 - c))
         first_norm = None
         self._slow_but_converging = False
+        kernels = self._kernels
         for m in range(max_iters):
             self.stats.newton_iters += 1
-            d = self.matrix.solve(-f)
-            if scale != 1.0:
-                d *= scale
-            y = y + d
-            yp = yp + cj * d
-            dw = d * weights
+            if kernels is not None:  # the same numbers in one compiled loop
+                y_new, yp_new, dw = np.empty_like(y), np.empty_like(yp), self._dw
+                kernels.newton_update(
+                    self.matrix.solve(f), scale, y, yp, cj, weights, y_new, yp_new, dw
+                )
+                y, yp = y_new, yp_new
+            else:
+                d = self.matrix.solve(-f)
+                if scale != 1.0:
+                    d *= scale
+                y = y + d
+                yp = yp + cj * d
+                dw = d * weights
             dnorm = math.sqrt(dw.dot(dw) / dw.size)  # self.norm(d, weights), inlined
             self._last_dnorm = dnorm
             if not math.isfinite(dnorm):
