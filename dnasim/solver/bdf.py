@@ -196,6 +196,7 @@ class NordsieckBDF:
         self._dw = np.zeros(self.n)  # the weighted Newton update
         self._w = np.zeros(self.n)  # the weights of the current step
         self._kernels = None  # the ``kernels`` module once loaded
+        self._predict = None  # its ``predict`` where it matches numpy's product
         atol_ok = isinstance(atol, np.ndarray) and atol.shape == (self.n,)
         if not atol_ok:
             self._kernels_at = math.inf
@@ -355,10 +356,18 @@ class NordsieckBDF:
             else:
                 t_new = self.t + h
             self._check_step_size(h, t_new)
-            z_pred = nd.predict(self.z, q, out=self._z_pred)
+            if self._predict is not None:
+                yp_pred = np.empty(self.n)
+                self._predict(nd.pascal_matrix(q), self.z, q, h, self._z_pred, yp_pred)
+                z_pred = self._z_pred[: q + 1]
+            else:
+                z_pred = nd.predict(self.z, q, out=self._z_pred)
+                yp_pred = None
             cj = nd.harmonic(q) / h
             t_res = np.nextafter(t_new, -np.inf) if (left_limit and t_new == t_stop) else t_new
-            converged, y, yp, delta = self._correct(t_res, z_pred, cj, h, weights, newton_weights)
+            converged, y, yp, delta = self._correct(
+                t_res, z_pred, cj, h, weights, newton_weights, yp_pred
+            )
             if not converged:
                 self.stats.rejected_newton += 1
                 n_newton_fail += 1
@@ -397,6 +406,8 @@ class NordsieckBDF:
             return
         kernels.warm()
         self._kernels = kernels
+        if kernels.predict_matches_numpy():
+            self._predict = kernels.predict
 
     def _reinitialize(self, h: float) -> None:
         """Make the last accepted point consistent again and restart there at order 1.
@@ -457,9 +468,12 @@ class NordsieckBDF:
 
     def _accept(self, t_new, z_pred, delta, y, yp) -> None:
         q = self.q
-        work = self._z_work[: q + 1]
-        np.multiply(nd.l_vector(q)[:, None], delta, out=work)
-        np.add(z_pred, work, out=self.z[: q + 1])  # z = z_pred + l Delta, in place
+        if self._kernels is not None:
+            self._kernels.correct(z_pred, nd.l_vector(q), delta, q, self.z)
+        else:
+            work = self._z_work[: q + 1]
+            np.multiply(nd.l_vector(q)[:, None], delta, out=work)
+            np.add(z_pred, work, out=self.z[: q + 1])  # z = z_pred + l Delta, in place
         self.t = t_new
         self.y = y
         self.yp = yp
@@ -468,7 +482,7 @@ class NordsieckBDF:
         self.jacobian_current = False
 
     # -- the corrector ---------------------------------------------------------------------
-    def _correct(self, t, z_pred, cj, h, weights, newton_weights):
+    def _correct(self, t, z_pred, cj, h, weights, newton_weights, yp_pred=None):
         """Modified Newton for the corrector; returns (converged, y, yp, Delta).
 
         ``weights``: the error weights of every component (the finite-difference
@@ -485,9 +499,11 @@ class NordsieckBDF:
         Newton needed more than 4 iterations where full Newton needed 5 (measured).
 
         When all of these fail, one more attempt starts the algebraic unknowns at
-        their last accepted values instead of the predictor's (``_last_chance``)."""
+        their last accepted values instead of the predictor's (``_last_chance``).
+        ``yp_pred``: z_pred[1] / h when already computed."""
         y_pred = z_pred[0]
-        yp_pred = z_pred[1] / h
+        if yp_pred is None:
+            yp_pred = z_pred[1] / h
         result = self._correct_from_predictor(t, y_pred, yp_pred, cj, h, weights, newton_weights)
         if result[0] or self.algebraic is None or not self.algebraic.any():
             return result
