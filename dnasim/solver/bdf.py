@@ -50,9 +50,13 @@ ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
 RESTART_FROM_SOLUTION = False
 RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_step
 # compiled loops of the step (``kernels``, bit-identical to the numpy code): at once when
-# numba is loaded in the process, else after this many steps of a run without a sparsity
-# pattern (numba's import pays only on long runs; plants without water never load it)
-KERNELS_AFTER_STEPS = 2000
+# numba is loaded in the process, else once the runs without a sparsity pattern have
+# taken this many steps in the process. Importing numba and loading the loops costs
+# about 0.3 s of CPU, the loops save about 8 us a step (Robertson, HIRES): they pay
+# after some 40000 steps; plants (sparse) load them only when water has loaded numba.
+KERNELS_AFTER_STEPS = 40000
+# [steps of the earlier dense runs of the process, the counters of the last one]
+_dense_runs = [0, None]
 
 
 @dataclass
@@ -203,7 +207,12 @@ class NordsieckBDF:
         elif "numba" in sys.modules:
             self._kernels_at = 0
         else:
-            self._kernels_at = math.inf if matrix.sparse else KERNELS_AFTER_STEPS
+            self._kernels_at = math.inf
+            if not matrix.sparse:
+                if _dense_runs[1] is not None:  # the last dense run is over
+                    _dense_runs[0] += _dense_runs[1].steps
+                _dense_runs[1] = stats
+                self._kernels_at = max(KERNELS_AFTER_STEPS - _dense_runs[0], 0)
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
         self.jacobian_current = False
         self.failure = StepFailure()
@@ -406,6 +415,7 @@ class NordsieckBDF:
             return
         kernels.warm()
         self._kernels = kernels
+        nd.compiled_rescale = kernels.rescale
         if kernels.predict_matches_numpy():
             self._predict = kernels.predict
 
@@ -655,7 +665,7 @@ class NordsieckBDF:
         for m in range(max_iters):
             self.stats.newton_iters += 1
             if kernels is not None:  # the same numbers in one compiled loop
-                y_new, yp_new, dw = np.empty_like(y), np.empty_like(yp), self._dw
+                y_new, yp_new, dw = np.empty(self.n), np.empty(self.n), self._dw
                 kernels.newton_update(
                     self.matrix.solve(f), scale, y, yp, cj, weights, y_new, yp_new, dw
                 )

@@ -87,6 +87,17 @@ def newton_update(x, scale, y, yp, cj, w, y_new, yp_new, dw):
 
 
 @numba.njit(cache=True, nogil=True)
+def rescale(z, q, ratio):
+    """Row j of z times ratio**j (j = 1..q), the factor formed as ratio * ratio * ...
+    one multiplication after the other as in ``nordsieck.rescale``."""
+    factor = 1.0
+    for j in range(1, q + 1):
+        factor *= ratio
+        for k in range(z.shape[1]):
+            z[j, k] *= factor
+
+
+@numba.njit(cache=True, nogil=True)
 def weights(y, rtol, atol, out):
     """out = 1 / (rtol |y| + atol), atol an array of y's size."""
     for i in range(y.size):
@@ -101,6 +112,7 @@ def warm() -> None:
     weights(a, 1e-6, a, np.empty(2))
     z = np.ones((7, 2))
     correct(z, np.ones(2), a, 1, np.empty((7, 2)))
+    rescale(z, 2, 1.0)
 
 
 _PREDICT_OK = None

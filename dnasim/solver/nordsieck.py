@@ -107,6 +107,11 @@ def predict(z: np.ndarray, q: int, out: np.ndarray | None = None) -> np.ndarray:
     return np.matmul(pascal_matrix(q), z[: q + 1], out=out[: q + 1])
 
 
+#: ``kernels.rescale`` (the same products in a compiled loop), set by ``bdf`` when it
+#: loads the compiled loops; None: numpy
+compiled_rescale = None
+
+
 def rescale(z: np.ndarray, q: int, ratio: float) -> None:
     """Change the step by the factor ``ratio`` in place: row j times ratio**j.
 
@@ -114,6 +119,9 @@ def rescale(z: np.ndarray, q: int, ratio: float) -> None:
     other, and every row is multiplied by its own in one broadcast operation (the
     same products as row by row, bit for bit, in one numpy call instead of q).
     """
+    if compiled_rescale is not None:
+        compiled_rescale(z, q, ratio)
+        return
     factors = [ratio]
     for _ in range(1, q):
         factors.append(factors[-1] * ratio)
