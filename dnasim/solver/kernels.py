@@ -55,12 +55,13 @@ def predict(pascal, z, q, h, out, yp_out):
     numpy's ``pascal @ z[:q+1]`` to the bit where that kernel is the one numpy calls;
     ``predict_matches_numpy`` checks that on the machine at hand before it is used."""
     n = z.shape[1]
-    for i in range(q + 1):
+    for i in range(q + 1):  # the sums run over j; k innermost, so the loop vectorises
         for k in range(n):
-            acc = 0.0
-            for j in range(q + 1):
-                acc = _fma(pascal[i, j], z[j, k], acc)
-            out[i, k] = acc
+            out[i, k] = 0.0
+        for j in range(q + 1):
+            p = pascal[i, j]
+            for k in range(n):
+                out[i, k] = _fma(p, z[j, k], out[i, k])
     for k in range(n):
         yp_out[k] = out[1, k] / h
 

@@ -71,21 +71,26 @@ def colour_columns(pattern: scipy.sparse.csc_matrix) -> list[np.ndarray]:
     )
     degree = np.diff((structure.T @ structure).tocsr().indptr)
     order = np.argsort(-degree, kind="stable")
-    group_rows: list[np.ndarray] = []  # per group: boolean mask of rows it already uses
+    # per row: the groups that already hold a column with an entry in it, as the bits
+    # of an integer; a column goes to the lowest group none of its rows has (first
+    # fit), a new one when there is none. Bit operations on Python integers: at 7015
+    # columns 10 ms, where a boolean row mask per group and numpy tests took 90 ms.
+    row_groups = [0] * n_rows
+    ptr, idx = indptr.tolist(), indices.tolist()
     group_of = np.empty(n_cols, dtype=np.intp)
-    for j in order:
-        rows = indices[indptr[j] : indptr[j + 1]]
-        for g, used in enumerate(group_rows):
-            if not used[rows].any():
-                used[rows] = True
-                group_of[j] = g
-                break
-        else:
-            used = np.zeros(n_rows, dtype=bool)
-            used[rows] = True
-            group_rows.append(used)
-            group_of[j] = len(group_rows) - 1
-    return [np.flatnonzero(group_of == g) for g in range(len(group_rows))]
+    n_groups = 0
+    for j in order.tolist():
+        rows = idx[ptr[j] : ptr[j + 1]]
+        taken = 0
+        for r in rows:
+            taken |= row_groups[r]
+        g = (~taken & (taken + 1)).bit_length() - 1  # the lowest group not taken
+        bit = 1 << g
+        for r in rows:
+            row_groups[r] |= bit
+        group_of[j] = g
+        n_groups = max(n_groups, g + 1)
+    return [np.flatnonzero(group_of == g) for g in range(n_groups)]
 
 
 def _columns_residual(residual) -> Callable | None:
@@ -167,9 +172,12 @@ class IterationMatrix:
             # For each group: the positions in pattern.data, their rows and columns.
             cols_of_entry = np.repeat(np.arange(n), np.diff(pattern.indptr))
             self._group_entries = []
-            for cols in self.groups:
-                mask = np.isin(cols_of_entry, cols)
-                pos = np.flatnonzero(mask)
+            group_of_col = np.empty(n, dtype=np.intp)
+            for g, cols in enumerate(self.groups):
+                group_of_col[cols] = g
+            group_of_entry = group_of_col[cols_of_entry]
+            for g, cols in enumerate(self.groups):
+                pos = np.flatnonzero(group_of_entry == g)
                 self._group_entries.append((cols, pos, pattern.indices[pos], cols_of_entry[pos]))
             # per group: F at a point perturbed in the group's columns, evaluating only
             # the rows that read them (``_columns_residual``), or None
