@@ -201,6 +201,7 @@ class NordsieckBDF:
         self._w = np.zeros(self.n)  # the weights of the current step
         self._kernels = None  # the ``kernels`` module once loaded
         self._predict = None  # its ``predict`` where it matches numpy's product
+        self._small_dense = False  # its dense solve where it matches LAPACK's
         atol_ok = isinstance(atol, np.ndarray) and atol.shape == (self.n,)
         if not atol_ok:
             self._kernels_at = math.inf
@@ -418,6 +419,11 @@ class NordsieckBDF:
         nd.compiled_rescale = kernels.rescale
         if kernels.predict_matches_numpy():
             self._predict = kernels.predict
+        self._small_dense = (
+            not self.matrix.sparse
+            and self.n <= kernels.SMALL_DENSE
+            and kernels.dense_solve_matches_lapack()
+        )
 
     def _reinitialize(self, h: float) -> None:
         """Make the last accepted point consistent again and restart there at order 1.
@@ -662,13 +668,19 @@ class NordsieckBDF:
         first_norm = None
         self._slow_but_converging = False
         kernels = self._kernels
+        lu = self.matrix.dense_lu() if self._small_dense else None
         for m in range(max_iters):
             self.stats.newton_iters += 1
             if kernels is not None:  # the same numbers in one compiled loop
                 y_new, yp_new, dw = np.empty(self.n), np.empty(self.n), self._dw
-                kernels.newton_update(
-                    self.matrix.solve(f), scale, y, yp, cj, weights, y_new, yp_new, dw
-                )
+                if lu is not None:  # the dense LU solve in the loop too
+                    kernels.newton_update_lu(
+                        lu[0], lu[1], f, scale, y, yp, cj, weights, y_new, yp_new, dw
+                    )
+                else:
+                    kernels.newton_update(
+                        self.matrix.solve(f), scale, y, yp, cj, weights, y_new, yp_new, dw
+                    )
                 y, yp = y_new, yp_new
             else:
                 d = self.matrix.solve(-f)

@@ -88,6 +88,43 @@ def newton_update(x, scale, y, yp, cj, w, y_new, yp_new, dw):
 
 
 @numba.njit(cache=True, nogil=True)
+def lu_solve_small(lu, piv, b):
+    """b <- A^-1 b in place from LAPACK's getrf factors (lu, piv 0-based), as
+    LAPACK's getrs with one right-hand side: the row interchanges, then L (unit
+    diagonal) and U column by column (b_k -= b_i L_ki; b_i /= U_ii, b_k -= b_i U_ki).
+
+    OpenBLAS does these column updates with its axpy kernel, whose vector part
+    (16 elements and more at a time) fuses multiply and add: below that, as here,
+    every product and difference is rounded on its own, so for n <= SMALL_DENSE
+    the result is getrs's to the bit (``dense_solve_matches_lapack`` checks that on
+    the machine at hand before it is used)."""
+    n = b.size
+    for i in range(n):
+        p = piv[i]
+        if p != i:
+            t = b[i]
+            b[i] = b[p]
+            b[p] = t
+    for i in range(n):
+        bi = b[i]
+        for k in range(i + 1, n):
+            b[k] -= bi * lu[k, i]
+    for i in range(n - 1, -1, -1):
+        b[i] = b[i] / lu[i, i]
+        bi = b[i]
+        for k in range(i):
+            b[k] -= bi * lu[k, i]
+
+
+@numba.njit(cache=True, nogil=True)
+def newton_update_lu(lu, piv, f, scale, y, yp, cj, w, y_new, yp_new, dw):
+    """``newton_update`` with the solve x = J^-1 F (``lu_solve_small``) in the loop."""
+    x = f.copy()
+    lu_solve_small(lu, piv, x)
+    newton_update(x, scale, y, yp, cj, w, y_new, yp_new, dw)
+
+
+@numba.njit(cache=True, nogil=True)
 def rescale(z, q, ratio):
     """Row j of z times ratio**j (j = 1..q), the factor formed as ratio * ratio * ...
     one multiplication after the other as in ``nordsieck.rescale``."""
@@ -114,9 +151,37 @@ def warm() -> None:
     z = np.ones((7, 2))
     correct(z, np.ones(2), a, 1, np.empty((7, 2)))
     rescale(z, 2, 1.0)
+    lu, piv = np.eye(2, order="F"), np.arange(2, dtype=np.int32)
+    newton_update_lu(lu, piv, a, 0.5, a, a, 1.0, a, np.empty(2), np.empty(2), np.empty(2))
 
 
+#: largest n of a dense matrix whose solve runs compiled (``lu_solve_small``)
+SMALL_DENSE = 15
 _PREDICT_OK = None
+_SOLVE_OK = None
+
+
+def dense_solve_matches_lapack() -> bool:
+    """``lu_solve_small`` gives scipy's LAPACK getrs bit for bit on random systems of
+    every n up to SMALL_DENSE (checked once per process; otherwise the step keeps
+    LAPACK's solve)."""
+    global _SOLVE_OK
+    if _SOLVE_OK is None:
+        import scipy.linalg
+
+        (getrs,) = scipy.linalg.get_lapack_funcs(("getrs",), (np.zeros(1),))
+        rng = np.random.default_rng(54321)
+        ok = True
+        for n in range(1, SMALL_DENSE + 1):
+            for _ in range(4):
+                a = rng.standard_normal((n, n)) * 10.0 ** rng.uniform(-3, 3, (n, n))
+                lu, piv = scipy.linalg.lu_factor(a + np.eye(n), check_finite=False)
+                b = rng.standard_normal(n) * 10.0 ** rng.uniform(-8, 8, n)
+                x = b.copy()
+                lu_solve_small(lu, piv, x)
+                ok = ok and np.array_equal(x, getrs(lu, piv, b)[0])
+        _SOLVE_OK = bool(ok)
+    return _SOLVE_OK
 
 
 def predict_matches_numpy() -> bool:

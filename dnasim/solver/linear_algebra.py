@@ -251,6 +251,13 @@ class IterationMatrix:
             return scipy.sparse.csc_matrix((data, p.indices, p.indptr), shape=p.shape)
         n = self.n
         matrix = np.empty((n, n))
+        if side0 is None:  # no kinks: one element perturbed, indexed as a scalar
+            for j in range(n):
+                y_pert, yp_pert = y.copy(), yp.copy()
+                y_pert[j] += dy[j]
+                yp_pert[j] += dyp[j]
+                matrix[:, j] = (self.residual(t, y_pert, yp_pert) - f0) / inc[j]
+            return matrix
         for j in range(n):
             f_pert, sign = perturbed(np.array([j]))
             matrix[:, j] = (f_pert - f0) / (sign * inc[j])
@@ -316,6 +323,10 @@ class IterationMatrix:
             and np.array_equal(m.indptr, self.pattern.indptr)
             and np.array_equal(m.indices, self.pattern.indices)
         )
+
+    def dense_lu(self):
+        """(lu, piv) of LAPACK's getrf for a dense matrix (None when sparse)."""
+        return None if self.sparse else self._lu
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """Solve J x = rhs with the stored LU factors."""
