@@ -55,6 +55,8 @@ RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_s
 # about 0.3 s of CPU, the loops save about 8 us a step (Robertson, HIRES): they pay
 # after some 40000 steps; plants (sparse) load them only when water has loaded numba.
 KERNELS_AFTER_STEPS = 40000
+# ``kernels.wrms`` once loaded and checked against numpy's dot (``NordsieckBDF.norm``)
+_compiled_wrms = [None]
 # [steps of the earlier dense runs of the process, the counters of the last one]
 _dense_runs = [0, None]
 
@@ -202,6 +204,7 @@ class NordsieckBDF:
         self._kernels = None  # the ``kernels`` module once loaded
         self._predict = None  # its ``predict`` where it matches numpy's product
         self._small_dense = False  # its dense solve where it matches LAPACK's
+        self._dot_ok = False  # its dot products match numpy's
         atol_ok = isinstance(atol, np.ndarray) and atol.shape == (self.n,)
         if not atol_ok:
             self._kernels_at = math.inf
@@ -324,6 +327,8 @@ class NordsieckBDF:
     @staticmethod
     def norm(v, w) -> float:
         """Weighted RMS norm sqrt(mean((v_i w_i)^2))."""
+        if _compiled_wrms[0] is not None:  # the same number in one compiled call
+            return _compiled_wrms[0](v, w)
         vw = v * w
         return math.sqrt(vw.dot(vw) / vw.size)
 
@@ -419,6 +424,9 @@ class NordsieckBDF:
         nd.compiled_rescale = kernels.rescale
         if kernels.predict_matches_numpy():
             self._predict = kernels.predict
+        self._dot_ok = kernels.dot_matches_numpy()
+        if self._dot_ok:
+            _compiled_wrms[0] = kernels.wrms
         self._small_dense = (
             not self.matrix.sparse
             and self.n <= kernels.SMALL_DENSE
@@ -674,14 +682,16 @@ class NordsieckBDF:
             if kernels is not None:  # the same numbers in one compiled loop
                 y_new, yp_new, dw = np.empty(self.n), np.empty(self.n), self._dw
                 if lu is not None:  # the dense LU solve in the loop too
-                    kernels.newton_update_lu(
+                    ss = kernels.newton_update_lu(
                         lu[0], lu[1], f, scale, y, yp, cj, weights, y_new, yp_new, dw
                     )
                 else:
-                    kernels.newton_update(
+                    ss = kernels.newton_update(
                         self.matrix.solve(f), scale, y, yp, cj, weights, y_new, yp_new, dw
                     )
                 y, yp = y_new, yp_new
+                if not self._dot_ok:
+                    ss = dw.dot(dw)
             else:
                 d = self.matrix.solve(-f)
                 if scale != 1.0:
@@ -689,7 +699,8 @@ class NordsieckBDF:
                 y = y + d
                 yp = yp + cj * d
                 dw = d * weights
-            dnorm = math.sqrt(dw.dot(dw) / dw.size)  # self.norm(d, weights), inlined
+                ss = dw.dot(dw)
+            dnorm = math.sqrt(ss / dw.size)  # self.norm(d, weights), inlined
             self._last_dnorm = dnorm
             if not math.isfinite(dnorm):
                 self.failure = StepFailure("the Newton update is not finite")

@@ -29,6 +29,8 @@ pays it.
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 from numba.core import types
@@ -77,7 +79,8 @@ def correct(z_pred, lvec, delta, q, z):
 
 @numba.njit(cache=True, nogil=True)
 def newton_update(x, scale, y, yp, cj, w, y_new, yp_new, dw):
-    """Fill y_new, yp_new and dw from the solve x = J^-1 F (formulas above)."""
+    """Fill y_new, yp_new and dw from the solve x = J^-1 F (formulas above); return
+    dw . dw (BLAS's ddot, as numpy's ``dw.dot(dw)``)."""
     for i in range(x.size):
         d = -x[i]
         if scale != 1.0:
@@ -85,6 +88,16 @@ def newton_update(x, scale, y, yp, cj, w, y_new, yp_new, dw):
         y_new[i] = y[i] + d
         yp_new[i] = yp[i] + cj * d
         dw[i] = d * w[i]
+    return np.dot(dw, dw)
+
+
+@numba.njit(cache=True, nogil=True)
+def wrms(v, w):
+    """sqrt(mean((v_i w_i)^2)), the dot product by BLAS's ddot as numpy's."""
+    vw = np.empty(v.size)
+    for i in range(v.size):
+        vw[i] = v[i] * w[i]
+    return math.sqrt(np.dot(vw, vw) / v.size)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -121,7 +134,7 @@ def newton_update_lu(lu, piv, f, scale, y, yp, cj, w, y_new, yp_new, dw):
     """``newton_update`` with the solve x = J^-1 F (``lu_solve_small``) in the loop."""
     x = f.copy()
     lu_solve_small(lu, piv, x)
-    newton_update(x, scale, y, yp, cj, w, y_new, yp_new, dw)
+    return newton_update(x, scale, y, yp, cj, w, y_new, yp_new, dw)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -151,6 +164,7 @@ def warm() -> None:
     z = np.ones((7, 2))
     correct(z, np.ones(2), a, 1, np.empty((7, 2)))
     rescale(z, 2, 1.0)
+    wrms(a, a)
     lu, piv = np.eye(2, order="F"), np.arange(2, dtype=np.int32)
     newton_update_lu(lu, piv, a, 0.5, a, a, 1.0, a, np.empty(2), np.empty(2), np.empty(2))
 
@@ -159,6 +173,28 @@ def warm() -> None:
 SMALL_DENSE = 15
 _PREDICT_OK = None
 _SOLVE_OK = None
+_DOT_OK = None
+
+
+def dot_matches_numpy() -> bool:
+    """numba's np.dot (scipy's BLAS) gives numpy's ``a.dot(a)`` bit for bit (checked
+    once per process on random vectors of several sizes; otherwise the step keeps
+    numpy's dot products)."""
+    global _DOT_OK
+    if _DOT_OK is None:
+        rng = np.random.default_rng(777)
+        ok = True
+        for n in (1, 2, 3, 7, 8, 15, 16, 17, 33, 100, 1001, 7015):
+            v = rng.standard_normal(n) * 10.0 ** rng.uniform(-5, 5, n)
+            w = 10.0 ** rng.uniform(-5, 5, n)
+            vw = v * w
+            ok = ok and wrms(v, w) == math.sqrt(vw.dot(vw) / vw.size)
+            d = rng.standard_normal(n)
+            dw, y1, y2 = np.empty(n), np.empty(n), np.empty(n)
+            ss = newton_update(d, 0.7, v, v, 3.0, w, y1, y2, dw)
+            ok = ok and ss == dw.dot(dw)
+        _DOT_OK = bool(ok)
+    return _DOT_OK
 
 
 def dense_solve_matches_lapack() -> bool:
