@@ -16,7 +16,13 @@ of the Test Set for IVP Solvers
 (Akzo, HIRES, transistor amplifier); for Robertson and Van der Pol, IDA/Radau at
 rtol 1e-12 in this run.
 
-    python benchmarks/solver_vs_peers.py [--repeat 3] [--rtols 1e-4 1e-6 1e-8]
+dnasim's step runs its compiled loops (``dnasim/solver/kernels.py``, numba; the same
+numbers as its numpy code to the bit): numba is imported before the runs, as in a
+process that simulates water. ``--numpy-step`` measures the numpy step instead
+(numba's import and the loops' loading are a once-per-process cost, like importing
+scikit-sundae, and counted for neither solver).
+
+    python benchmarks/solver_vs_peers.py [--repeat 3] [--rtols 1e-4 1e-6 1e-8] [--numpy-step]
 """
 
 from __future__ import annotations
@@ -324,13 +330,23 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--rtols", type=float, nargs="+", default=[1e-4, 1e-6, 1e-8])
+    parser.add_argument(
+        "--numpy-step", action="store_true", help="dnasim's step without its compiled loops"
+    )
     args = parser.parse_args()
+    from dnasim.solver import bdf
+
+    if args.numpy_step:
+        bdf.KERNELS = False
+    else:
+        import numba  # noqa: F401  (the compiled loops are then used from the first step)
     rows = run_all(args.rtols, args.repeat)
     import sksundae
 
+    step = "numpy step" if args.numpy_step else "compiled loops"
     print(
         f"# solver_vs_peers, {datetime.date.today().isoformat()}, numpy {np.__version__}, "
-        f"scipy {scipy.__version__}, scikit-sundae {sksundae.__version__}"
+        f"scipy {scipy.__version__}, scikit-sundae {sksundae.__version__}, dnasim: {step}"
     )
     print(table(rows))
     print(summary(rows))

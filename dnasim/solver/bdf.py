@@ -55,6 +55,7 @@ RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_s
 # about 0.3 s of CPU, the loops save about 8 us a step (Robertson, HIRES): they pay
 # after some 40000 steps; plants (sparse) load them only when water has loaded numba.
 KERNELS_AFTER_STEPS = 40000
+KERNELS = True  # False: the numpy step only (benchmarks/solver_vs_peers.py --numpy-step)
 # ``kernels.wrms`` once loaded and checked against numpy's dot (``NordsieckBDF.norm``)
 _compiled_wrms = [None]
 # [steps of the earlier dense runs of the process, the counters of the last one]
@@ -206,7 +207,7 @@ class NordsieckBDF:
         self._small_dense = False  # its dense solve where it matches LAPACK's
         self._dot_ok = False  # its dot products match numpy's
         atol_ok = isinstance(atol, np.ndarray) and atol.shape == (self.n,)
-        if not atol_ok:
+        if not atol_ok or not KERNELS:
             self._kernels_at = math.inf
         elif "numba" in sys.modules:
             self._kernels_at = 0
