@@ -31,7 +31,6 @@ kink where the point lies, the derivative of the smooth piece it is on.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -50,7 +49,8 @@ SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 #: node temperature of 205 K through the flow reversal, below the isentropic bound of
 #: 256 K), not yet understood; with the band LU the zeros cost only band storage.
 KEEP_DIAGONAL = True
-(_GETRS,) = scipy.linalg.get_lapack_funcs(("getrs",), (np.zeros(1),))
+# LAPACK directly: scipy's wrappers (lu_factor, lu_solve) cost more than the work here
+_GETRF, _GETRS = scipy.linalg.get_lapack_funcs(("getrf", "getrs"), (np.zeros(1),))
 
 
 def colour_columns(pattern: scipy.sparse.csc_matrix) -> list[np.ndarray]:
@@ -302,10 +302,11 @@ class IterationMatrix:
                 raise SingularMatrixError(self._describe_singular(str(exc))) from None
             diag_u = self._lu.U.diagonal()
         else:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-                self._lu = scipy.linalg.lu_factor(self.matrix, check_finite=False)
-            diag_u = np.diag(self._lu[0])
+            # getrf as scipy.linalg.lu_factor calls it (a copy of the matrix is factorised);
+            # a zero pivot (info > 0) is caught below
+            lu, piv, _ = _GETRF(self.matrix)
+            self._lu = (lu, piv)
+            diag_u = np.diag(lu)
         if np.any(diag_u == 0.0) or not np.all(np.isfinite(diag_u)):
             raise SingularMatrixError(self._describe_singular("a zero pivot in LU"))
 
