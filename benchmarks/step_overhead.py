@@ -56,6 +56,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     import numba  # noqa: F401  (loaded first: the compiled variant runs from its first step)
 
+    bdf.KERNELS_AFTER_STEPS_LOADED = 0
+
     problems = {p["name"]: p for p in svp.problems()}
     head = (
         f"{'problem':<16} {'rtol':>6} {'steps':>6} {'F evals':>8} {'F [us]':>7} | "

@@ -148,6 +148,7 @@ def _solve(monkeypatch, compiled, name):
     """A whole solve with (True) or without (False) the compiled loops."""
     monkeypatch.setattr(bdf, "KERNELS", compiled)
     monkeypatch.setattr(bdf, "KERNELS_AFTER_STEPS", 0 if compiled else 10**12)
+    monkeypatch.setattr(bdf, "KERNELS_AFTER_STEPS_LOADED", 0 if compiled else 10**12)
     if not compiled:  # the process-wide hooks back to numpy for this run
         monkeypatch.setattr(bdf, "_compiled_wrms", [None])
         monkeypatch.setattr(nd, "compiled_rescale", None)

@@ -49,17 +49,21 @@ ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
 # restart step from the solution (True) or IDA's rule (False, the default), see restart_step
 RESTART_FROM_SOLUTION = False
 RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_step
-# compiled loops of the step (``kernels``, bit-identical to the numpy code): at once when
-# numba is loaded in the process, else once the runs without a sparsity pattern have
-# taken this many steps in the process. Importing numba and loading the loops costs
-# about 0.3 s of CPU, the loops save about 8 us a step (Robertson, HIRES): they pay
-# after some 40000 steps; plants (sparse) load them only when water has loaded numba.
-KERNELS_AFTER_STEPS = 40000
+# compiled loops of the step (``kernels``, bit-identical to the numpy code), loaded once
+# they pay. They save about 8 us a step on small problems (Robertson, HIRES) and about
+# 0.007 us per unknown more (~55 us a step on the 1000-volume pipe, n = 7015). Where
+# numba is loaded (water plants) loading them costs about 10 ms of CPU: at once for n
+# >= KERNELS_MIN_N, else once the process has taken KERNELS_AFTER_STEPS_LOADED steps.
+# Importing numba first costs about 0.3 s: only for runs without a sparsity pattern,
+# after KERNELS_AFTER_STEPS steps in the process; plants of ideal gases never load it.
 KERNELS = True  # False: the numpy step only (benchmarks/solver_vs_peers.py --numpy-step)
+KERNELS_MIN_N = 1000
+KERNELS_AFTER_STEPS_LOADED = 2000
+KERNELS_AFTER_STEPS = 40000
 # ``kernels.wrms`` once loaded and checked against numpy's dot (``NordsieckBDF.norm``)
 _compiled_wrms = [None]
-# [steps of the earlier dense runs of the process, the counters of the last one]
-_dense_runs = [0, None]
+# [steps of the earlier runs of the process, the counters of the last run]
+_runs = [0, None]
 
 
 @dataclass
@@ -206,18 +210,19 @@ class NordsieckBDF:
         self._predict = None  # its ``predict`` where it matches numpy's product
         self._small_dense = False  # its dense solve where it matches LAPACK's
         self._dot_ok = False  # its dot products match numpy's
+        if _runs[1] is not None:  # the last run of the process is over
+            _runs[0] += _runs[1].steps
+        _runs[1] = stats
         atol_ok = isinstance(atol, np.ndarray) and atol.shape == (self.n,)
         if not atol_ok or not KERNELS:
             self._kernels_at = math.inf
         elif "numba" in sys.modules:
-            self._kernels_at = 0
+            at = 0 if self.n >= KERNELS_MIN_N else KERNELS_AFTER_STEPS_LOADED
+            self._kernels_at = max(at - _runs[0], 0)
+        elif not matrix.sparse:
+            self._kernels_at = max(KERNELS_AFTER_STEPS - _runs[0], 0)
         else:
             self._kernels_at = math.inf
-            if not matrix.sparse:
-                if _dense_runs[1] is not None:  # the last dense run is over
-                    _dense_runs[0] += _dense_runs[1].steps
-                _dense_runs[1] = stats
-                self._kernels_at = max(KERNELS_AFTER_STEPS - _dense_runs[0], 0)
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
         self.jacobian_current = False
         self.failure = StepFailure()
@@ -420,8 +425,7 @@ class NordsieckBDF:
             from dnasim.solver import kernels
         except ImportError:  # pragma: no cover - numba is a dependency
             return
-        kernels.warm()
-        self._kernels = kernels
+        self._kernels = kernels  # each loop is loaded from numba's cache at its first call
         nd.compiled_rescale = kernels.rescale
         if kernels.predict_matches_numpy():
             self._predict = kernels.predict
