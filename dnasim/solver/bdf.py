@@ -205,7 +205,6 @@ class NordsieckBDF:
         self._error_all = bool(np.all(self.error_mask == 1.0))
         self._norm_all = bool(np.all(self.norm_mask == 1.0))
         self._dw = np.zeros(self.n)  # the weighted Newton update
-        self._w = np.zeros(self.n)  # the weights of the current step
         self._kernels = None  # the ``kernels`` module once loaded
         self._predict = None  # its ``predict`` where it matches numpy's product
         self._small_dense = False  # its dense solve where it matches LAPACK's

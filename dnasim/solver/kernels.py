@@ -6,8 +6,12 @@ operation; numba without fastmath neither reassociates nor fuses a multiply and 
 add), so the results are bit-identical to it (tests/test_solver_kernels.py) and no
 decision of the solver changes. What they save is numpy's per-call overhead: on
 this machine a numpy operation on a few elements costs 0.6 to 1 us, a compiled call
-with the same arguments about 1 us for the whole loop. Reductions (the dot products
-of the norms) stay in numpy: BLAS's ddot sums in its own order.
+with the same arguments about 1 us for the whole loop. The dot products of the norms
+call BLAS's ddot from the loop (numba's np.dot), the routine numpy calls.
+
+Loops: ``weights``, ``predict`` (P z and y'_pred), ``newton_update`` (and
+``newton_update_lu`` with the dense LU solve ``lu_solve_small`` inside), ``correct``
+(z = z_pred + l Delta), ``rescale`` (row j times ratio^j) and ``wrms`` (the norm).
 
 ``newton_update`` (one modified-Newton update, after the LU solve x = J^-1 F):
 
@@ -20,11 +24,15 @@ right-hand side).
 
 ``weights``: w = 1 / (rtol |y| + atol)   [1 / unit of y]
 
-The module imports numba; ``bdf`` loads it only when numba is already loaded in the
-process (water plants load it for IF97) or when a run without a sparsity pattern has
-taken ``bdf.KERNELS_AFTER_STEPS`` steps: importing numba and loading the cached
-loops costs about 0.3 s of CPU once per process, and a plant of ideal gases never
-pays it.
+The module imports numba; ``bdf`` loads it only where it pays (``bdf.KERNELS_MIN_N``,
+``bdf.KERNELS_AFTER_STEPS_LOADED``, ``bdf.KERNELS_AFTER_STEPS``): with numba already
+loaded (water plants load it for IF97) the loops cost about 10 ms of CPU to load from
+numba's cache, importing numba first about 0.3 s; a plant of ideal gases never loads
+them. Three of them follow a library's summation order rather than numpy's element-wise
+rules (``predict``: BLAS's dgemm; ``lu_solve_small``: LAPACK's getrs; the dot products:
+BLAS's ddot); each is checked against the library once per process
+(``predict_matches_numpy``, ``dense_solve_matches_lapack``, ``dot_matches_numpy``) and
+used only where it matches to the bit.
 """
 
 from __future__ import annotations
@@ -154,19 +162,6 @@ def weights(y, rtol, atol, out):
     for i in range(y.size):
         out[i] = 1.0 / (rtol * abs(y[i]) + atol[i])
     return out
-
-
-def warm() -> None:
-    """Compile or load every loop (so the first step does not pay for it)."""
-    a = np.ones(2)
-    newton_update(a, 0.5, a, a, 1.0, a, np.empty(2), np.empty(2), np.empty(2))
-    weights(a, 1e-6, a, np.empty(2))
-    z = np.ones((7, 2))
-    correct(z, np.ones(2), a, 1, np.empty((7, 2)))
-    rescale(z, 2, 1.0)
-    wrms(a, a)
-    lu, piv = np.eye(2, order="F"), np.arange(2, dtype=np.int32)
-    newton_update_lu(lu, piv, a, 0.5, a, a, 1.0, a, np.empty(2), np.empty(2), np.empty(2))
 
 
 #: largest n of a dense matrix whose solve runs compiled (``lu_solve_small``)
