@@ -10,9 +10,9 @@ Columns: significant correct digits at the end point (min over components larger
 than their atol of -log10 |err|/|ref|), steps, residual evaluations, Jacobians, LU
 factorisations, CPU time of this process (best of --repeat after one untimed run;
 the machine is shared, so wall time is not used), and dnasim's time and evaluations
-divided by IDA's; at the end the geometric means of the time ratio and of the evaluation ratio, and the
-digits of dnasim minus IDA's (smallest and mean). References: the published values
-of the Test Set for IVP Solvers
+divided by IDA's; at the end the geometric means of the time ratio and of the
+evaluation ratio, and the digits of dnasim minus IDA's (smallest and mean).
+References: the published values of the Test Set for IVP Solvers
 (Akzo, HIRES, transistor amplifier); for Robertson and Van der Pol, IDA/Radau at
 rtol 1e-12 in this run.
 
