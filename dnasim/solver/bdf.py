@@ -50,10 +50,10 @@ ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
 RESTART_FROM_SOLUTION = False
 RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_step
 # compiled loops of the step (``kernels``, bit-identical to the numpy code), loaded once
-# they pay. They save about 8 us a step on small problems (Robertson, HIRES) and about
-# 0.007 us per unknown more (~55 us a step on the 1000-volume pipe, n = 7015). Where
-# numba is loaded (water plants) loading them costs about 10 ms of CPU: at once for n
-# >= KERNELS_MIN_N, else once the process has taken KERNELS_AFTER_STEPS_LOADED steps.
+# they pay. They save 10 to 14 us a step on small problems (benchmarks/step_overhead.py)
+# and replace some 20 numpy passes over arrays of n elements a step. Where numba is
+# loaded (water plants) loading them costs about 10 ms of CPU: at once for n >=
+# KERNELS_MIN_N, else once the process has taken KERNELS_AFTER_STEPS_LOADED steps.
 # Importing numba first costs about 0.3 s: only for runs without a sparsity pattern,
 # after KERNELS_AFTER_STEPS steps in the process; plants of ideal gases never load it.
 KERNELS = True  # False: the numpy step only (benchmarks/solver_vs_peers.py --numpy-step)
