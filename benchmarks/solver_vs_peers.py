@@ -8,15 +8,22 @@ and every call of it is counted, finite-difference Jacobians included.
 
 Columns: significant correct digits at the end point (min over components larger
 than their atol of -log10 |err|/|ref|), steps, residual evaluations, Jacobians, LU
-factorisations, CPU time of this process (best of --repeat; the machine is shared,
-so wall time is not used), and dnasim's time and evaluations divided by IDA's; at
-the end the geometric means of the time ratio and of the evaluation ratio, and the
-digits of dnasim minus IDA's (smallest and mean). References: the published values
-of the Test Set for IVP Solvers
+factorisations, CPU time of this process (best of --repeat after one untimed run;
+the machine is shared, so wall time is not used), and dnasim's time and evaluations
+divided by IDA's; at the end the geometric means of the time ratio and of the
+evaluation ratio, and the digits of dnasim minus IDA's (smallest and mean).
+References: the published values of the Test Set for IVP Solvers
 (Akzo, HIRES, transistor amplifier); for Robertson and Van der Pol, IDA/Radau at
 rtol 1e-12 in this run.
 
-    python benchmarks/solver_vs_peers.py [--repeat 3] [--rtols 1e-4 1e-6 1e-8]
+dnasim's step runs its compiled loops (``dnasim/solver/kernels.py``, numba; the same
+numbers as its numpy code to the bit) from the first step: numba is imported before
+the runs, as in a process that simulates water and has run a while (``bdf``'s rule:
+after 2000 steps in a process that has numba loaded). ``--numpy-step`` measures the
+numpy step instead. numba's import and the loops' loading are a once-per-process cost,
+like importing scikit-sundae, and counted for neither solver.
+
+    python benchmarks/solver_vs_peers.py [--repeat 3] [--rtols 1e-4 1e-6 1e-8] [--numpy-step]
 """
 
 from __future__ import annotations
@@ -194,6 +201,9 @@ def reference(p, y0, yp0):
 
 
 def best_of(repeat, fn):
+    """Best CPU time of ``repeat`` calls after one untimed call: scikit-sundae's first
+    two runs in a process take about 4 times longer than the later ones (measured)."""
+    fn()
     best, out = np.inf, None
     for _ in range(repeat):
         start = time.process_time()
@@ -324,13 +334,25 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--rtols", type=float, nargs="+", default=[1e-4, 1e-6, 1e-8])
+    parser.add_argument(
+        "--numpy-step", action="store_true", help="dnasim's step without its compiled loops"
+    )
     args = parser.parse_args()
+    from dnasim.solver import bdf
+
+    if args.numpy_step:
+        bdf.KERNELS = False
+    else:  # the compiled loops from the first step, as in a process that has run long
+        import numba  # noqa: F401
+
+        bdf.KERNELS_AFTER_STEPS_LOADED = 0
     rows = run_all(args.rtols, args.repeat)
     import sksundae
 
+    step = "numpy step" if args.numpy_step else "compiled loops"
     print(
         f"# solver_vs_peers, {datetime.date.today().isoformat()}, numpy {np.__version__}, "
-        f"scipy {scipy.__version__}, scikit-sundae {sksundae.__version__}"
+        f"scipy {scipy.__version__}, scikit-sundae {sksundae.__version__}, dnasim: {step}"
     )
     print(table(rows))
     print(summary(rows))

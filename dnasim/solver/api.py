@@ -570,8 +570,8 @@ class _Output:
     def _emit(self, t, y, yp):
         if self.keep:
             self.t.append(t)
-            self.y.append(np.array(y))
-            self.yp.append(np.array(yp))
+            self.y.append(y.copy() if type(y) is np.ndarray else np.array(y))
+            self.yp.append(yp.copy() if type(yp) is np.ndarray else np.array(yp))
         self.last_t = t
         if self.callback is not None:
             call_user(self.callback, "the output callback", t, t, y, yp)

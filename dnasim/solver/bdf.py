@@ -21,6 +21,7 @@ Gear's Nordsieck BDF as in LSODE; see ``nordsieck.py`` for the algebra.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,6 +60,21 @@ MIN_Q_STAB = 4  # orders below are left alone: see _stability_limited
 # restart step from the solution (True) or IDA's rule (False, the default), see restart_step
 RESTART_FROM_SOLUTION = False
 RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_step
+# compiled loops of the step (``kernels``, bit-identical to the numpy code), loaded once
+# they pay. They save 10 to 14 us a step on small problems (benchmarks/step_overhead.py)
+# and replace some 20 numpy passes over arrays of n elements a step. Where numba is
+# loaded (water plants) loading them costs about 10 ms of CPU: at once for n >=
+# KERNELS_MIN_N, else once the process has taken KERNELS_AFTER_STEPS_LOADED steps.
+# Importing numba first costs about 0.3 s: only for runs without a sparsity pattern,
+# after KERNELS_AFTER_STEPS steps in the process; plants of ideal gases never load it.
+KERNELS = True  # False: the numpy step only (benchmarks/solver_vs_peers.py --numpy-step)
+KERNELS_MIN_N = 1000
+KERNELS_AFTER_STEPS_LOADED = 2000
+KERNELS_AFTER_STEPS = 40000
+# ``kernels.wrms`` once loaded and checked against numpy's dot (``NordsieckBDF.norm``)
+_compiled_wrms = [None]
+# [steps of the earlier runs of the process, the counters of the last run]
+_runs = [0, None]
 
 
 @dataclass
@@ -193,6 +209,30 @@ class NordsieckBDF:
         self.fixed_order = fixed_order
         self.fixed_step = fixed_step
         self.z = np.zeros((nd.MAX_ORDER + 2, self.n))
+        # work arrays of the hot path (``step``): the predicted array and a product
+        self._z_pred = np.zeros_like(self.z)
+        self._z_work = np.zeros_like(self.z)
+        # masks of ones: the weights are used as they are (x * 1.0 == x, bit for bit)
+        self._error_all = bool(np.all(self.error_mask == 1.0))
+        self._norm_all = bool(np.all(self.norm_mask == 1.0))
+        self._dw = np.zeros(self.n)  # the weighted Newton update
+        self._kernels = None  # the ``kernels`` module once loaded
+        self._predict = None  # its ``predict`` where it matches numpy's product
+        self._small_dense = False  # its dense solve where it matches LAPACK's
+        self._dot_ok = False  # its dot products match numpy's
+        if _runs[1] is not None:  # the last run of the process is over
+            _runs[0] += _runs[1].steps
+        _runs[1] = stats
+        atol_ok = isinstance(atol, np.ndarray) and atol.shape == (self.n,)
+        if not atol_ok or not KERNELS:
+            self._kernels_at = math.inf
+        elif "numba" in sys.modules:
+            at = 0 if self.n >= KERNELS_MIN_N else KERNELS_AFTER_STEPS_LOADED
+            self._kernels_at = max(at - _runs[0], 0)
+        elif not matrix.sparse:
+            self._kernels_at = max(KERNELS_AFTER_STEPS - _runs[0], 0)
+        else:
+            self._kernels_at = math.inf
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
         self.jacobian_current = False
         self.failure = StepFailure()
@@ -307,6 +347,8 @@ class NordsieckBDF:
     @staticmethod
     def norm(v, w) -> float:
         """Weighted RMS norm sqrt(mean((v_i w_i)^2))."""
+        if _compiled_wrms[0] is not None:  # the same number in one compiled call
+            return _compiled_wrms[0](v, w)
         vw = v * w
         return math.sqrt(vw.dot(vw) / vw.size)
 
@@ -318,9 +360,14 @@ class NordsieckBDF:
         an ulp before it: t_stop is a discontinuity and the step must see the
         values from its left (a boundary that steps at t_stop, say).
         """
-        weights = self.weights_for(self.y)
-        error_weights = weights * self.error_mask
-        newton_weights = weights * self.norm_mask
+        if self._kernels is None and self.stats.steps >= self._kernels_at:
+            self._load_kernels()
+        if self._kernels is not None:
+            weights = self._kernels.weights(self.y, self.rtol, self.atol, np.empty(self.n))
+        else:
+            weights = self.weights_for(self.y)
+        error_weights = weights if self._error_all else weights * self.error_mask
+        newton_weights = weights if self._norm_all else weights * self.norm_mask
         n_newton_fail = 0
         n_error_fail = 0
         reinitialized = False
@@ -344,10 +391,18 @@ class NordsieckBDF:
             else:
                 t_new = self.t + h
             self._check_step_size(h, t_new)
-            z_pred = nd.predict(self.z, q)
+            if self._predict is not None:
+                yp_pred = np.empty(self.n)
+                self._predict(nd.pascal_matrix(q), self.z, q, h, self._z_pred, yp_pred)
+                z_pred = self._z_pred[: q + 1]
+            else:
+                z_pred = nd.predict(self.z, q, out=self._z_pred)
+                yp_pred = None
             cj = nd.harmonic(q) / h
             t_res = np.nextafter(t_new, -np.inf) if (left_limit and t_new == t_stop) else t_new
-            converged, y, yp, delta = self._correct(t_res, z_pred, cj, h, weights, newton_weights)
+            converged, y, yp, delta = self._correct(
+                t_res, z_pred, cj, h, weights, newton_weights, yp_pred
+            )
             if not converged:
                 self.stats.rejected_newton += 1
                 n_newton_fail += 1
@@ -376,6 +431,26 @@ class NordsieckBDF:
             self.h_used, self.q_used = h, q
             self._choose_next(error, delta, error_weights, failed_this_step)
             return
+
+    def _load_kernels(self) -> None:
+        """Import the compiled loops (``kernels``); without numba, go on in numpy."""
+        self._kernels_at = math.inf
+        try:
+            from dnasim.solver import kernels
+        except ImportError:  # pragma: no cover - numba is a dependency
+            return
+        self._kernels = kernels  # each loop is loaded from numba's cache at its first call
+        nd.compiled_rescale = kernels.rescale
+        if kernels.predict_matches_numpy():
+            self._predict = kernels.predict
+        self._dot_ok = kernels.dot_matches_numpy()
+        if self._dot_ok:
+            _compiled_wrms[0] = kernels.wrms
+        self._small_dense = (
+            not self.matrix.sparse
+            and self.n <= kernels.SMALL_DENSE
+            and kernels.dense_solve_matches_lapack()
+        )
 
     def _reinitialize(self, h: float) -> None:
         """Make the last accepted point consistent again and restart there at order 1.
@@ -427,7 +502,7 @@ class NordsieckBDF:
         return eta
 
     def _check_step_size(self, h, t_new) -> None:
-        if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not np.isfinite(h):
+        if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not math.isfinite(h):
             raise DAEError(
                 self._failure_message(
                     t_new, h, f"the step size fell to round-off level (h = {h:.3g})"
@@ -436,7 +511,12 @@ class NordsieckBDF:
 
     def _accept(self, t_new, z_pred, delta, y, yp) -> None:
         q = self.q
-        self.z[: q + 1] = z_pred + nd.l_vector(q)[:, None] * delta
+        if self._kernels is not None:
+            self._kernels.correct(z_pred, nd.l_vector(q), delta, q, self.z)
+        else:
+            work = self._z_work[: q + 1]
+            np.multiply(nd.l_vector(q)[:, None], delta, out=work)
+            np.add(z_pred, work, out=self.z[: q + 1])  # z = z_pred + l Delta, in place
         self.t = t_new
         self.y = y
         self.yp = yp
@@ -445,7 +525,7 @@ class NordsieckBDF:
         self.jacobian_current = False
 
     # -- the corrector ---------------------------------------------------------------------
-    def _correct(self, t, z_pred, cj, h, weights, newton_weights):
+    def _correct(self, t, z_pred, cj, h, weights, newton_weights, yp_pred=None):
         """Modified Newton for the corrector; returns (converged, y, yp, Delta).
 
         ``weights``: the error weights of every component (the finite-difference
@@ -462,9 +542,11 @@ class NordsieckBDF:
         Newton needed more than 4 iterations where full Newton needed 5 (measured).
 
         When all of these fail, one more attempt starts the algebraic unknowns at
-        their last accepted values instead of the predictor's (``_last_chance``)."""
+        their last accepted values instead of the predictor's (``_last_chance``).
+        ``yp_pred``: z_pred[1] / h when already computed."""
         y_pred = z_pred[0]
-        yp_pred = z_pred[1] / h
+        if yp_pred is None:
+            yp_pred = z_pred[1] / h
         result = self._correct_from_predictor(t, y_pred, yp_pred, cj, h, weights, newton_weights)
         if result[0] or self.algebraic is None or not self.algebraic.any():
             return result
@@ -621,15 +703,32 @@ class NordsieckBDF:
         self.newton_ss = max(self.newton_ss, c / (1.0 - c))
         first_norm = None
         self._slow_but_converging = False
+        kernels = self._kernels
+        lu = self.matrix.dense_lu() if self._small_dense else None
         for m in range(max_iters):
             self.stats.newton_iters += 1
-            d = self.matrix.solve(-f)
-            if scale != 1.0:
-                d *= scale
-            y = y + d
-            yp = yp + cj * d
-            dw = d * weights
-            dnorm = math.sqrt(dw.dot(dw) / dw.size)  # self.norm(d, weights), inlined
+            if kernels is not None:  # the same numbers in one compiled loop
+                y_new, yp_new, dw = np.empty(self.n), np.empty(self.n), self._dw
+                if lu is not None:  # the dense LU solve in the loop too
+                    ss = kernels.newton_update_lu(
+                        lu[0], lu[1], f, scale, y, yp, cj, weights, y_new, yp_new, dw
+                    )
+                else:
+                    ss = kernels.newton_update(
+                        self.matrix.solve(f), scale, y, yp, cj, weights, y_new, yp_new, dw
+                    )
+                y, yp = y_new, yp_new
+                if not self._dot_ok:
+                    ss = dw.dot(dw)
+            else:
+                d = self.matrix.solve(-f)
+                if scale != 1.0:
+                    d *= scale
+                y = y + d
+                yp = yp + cj * d
+                dw = d * weights
+                ss = dw.dot(dw)
+            dnorm = math.sqrt(ss / dw.size)  # self.norm(d, weights), inlined
             self._last_dnorm = dnorm
             if not math.isfinite(dnorm):
                 self.failure = StepFailure("the Newton update is not finite")

@@ -97,17 +97,35 @@ def higher_order_error_coefficient(q: int) -> float:
     return 1.0 / ((1.0 + 1.0 / ((q + 1) * harmonic(q))) * (q + 2) * harmonic(q + 1))
 
 
-def predict(z: np.ndarray, q: int) -> np.ndarray:
-    """Taylor-shift the rows 0..q of the Nordsieck array one step ahead: P z."""
-    return pascal_matrix(q) @ z[: q + 1]
+def predict(z: np.ndarray, q: int, out: np.ndarray | None = None) -> np.ndarray:
+    """Taylor-shift the rows 0..q of the Nordsieck array one step ahead: P z.
+
+    ``out``: an array of z's shape to hold the result in its rows 0..q (no new array).
+    """
+    if out is None:
+        return pascal_matrix(q) @ z[: q + 1]
+    return np.matmul(pascal_matrix(q), z[: q + 1], out=out[: q + 1])
+
+
+#: ``kernels.rescale`` (the same products in a compiled loop), set by ``bdf`` when it
+#: loads the compiled loops; None: numpy
+compiled_rescale = None
 
 
 def rescale(z: np.ndarray, q: int, ratio: float) -> None:
-    """Change the step by the factor ``ratio`` in place: row j times ratio**j."""
-    factor = 1.0
-    for j in range(1, q + 1):
-        factor *= ratio
-        z[j] *= factor
+    """Change the step by the factor ``ratio`` in place: row j times ratio**j.
+
+    The factors are the products ratio * ratio * ... (j of them) formed one after the
+    other, and every row is multiplied by its own in one broadcast operation (the
+    same products as row by row, bit for bit, in one numpy call instead of q).
+    """
+    if compiled_rescale is not None:
+        compiled_rescale(z, q, ratio)
+        return
+    factors = [ratio]
+    for _ in range(1, q):
+        factors.append(factors[-1] * ratio)
+    z[1 : q + 1] *= np.array(factors)[:, None]
 
 
 @cache
