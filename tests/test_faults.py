@@ -333,8 +333,11 @@ def test_atol_must_be_finite_and_positive(tmp_path, value):
 
 
 def test_sigterm_while_starting_exits_with_a_message(tmp_path):
+    # tight tolerances: the whole default run now takes under 1 s of CPU, so it could end
+    # before the signal; at 1e-10 it lasts many seconds
+    cmd = [*DNASIM, "run", str(PLANTS / "attemperator.toml"), "-o", str(tmp_path), "-q"]
     proc = subprocess.Popen(
-        [*DNASIM, "run", str(PLANTS / "attemperator.toml"), "-o", str(tmp_path), "-q"],
+        [*cmd, "--rtol", "1e-10", "--atol-scaled", "1e-10"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -344,6 +347,7 @@ def test_sigterm_while_starting_exits_with_a_message(tmp_path):
     # after Python itself has started (about 0.2 s, the one window where SIGTERM still
     # kills silently), while numpy, CoolProp and the plant load or the run starts
     time.sleep(1.0)
+    assert proc.poll() is None, "the run ended before the signal; the test did not test"
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 1, (proc.returncode, err)
