@@ -15,8 +15,8 @@ atol vector; dnasim leaves the algebraic variables out of its error test, as
 `dnasim run` does (IDA through scikit-sundae cannot: it has no IDASetSuppressAlg).
 Printed per N: unknowns, CPU time (``time.process_time``: the machine
 is shared, so wall time is noise) per simulated second, steps, residual
-evaluations, property calls (calls of ``medium.state`` and ``medium.states``,
-cache hits included) and the states the backend computed ("prop pts",
+evaluations, property calls (calls of ``medium.state``, ``medium.states`` and
+``medium.T_rho_u``, the pipes' lean call, cache hits included) and the states the backend computed ("prop pts",
 ``medium.n_evaluations``), the share of the run's wall time spent inside property calls,
 T_out at t_end, and the ratio of the CPU times IDA/dnasim (> 1: dnasim faster).
 ``--json FILE`` also writes the rows (T_out to full precision) for comparing two
@@ -71,7 +71,8 @@ def steam_pipe(n):
 
 
 class PropertyTimer:
-    """Wraps medium.state and medium.states on the shared Water instance; accumulates
+    """Wraps medium.state, medium.states and medium.T_rho_u on the shared Water instance
+    (each when the medium has it); accumulates
     their wall time (perf_counter: a CPU clock costs a system call per read, which
     would inflate the 1e5 scalar calls of a run) and number of calls."""
 
@@ -95,13 +96,14 @@ class PropertyTimer:
 
     def __enter__(self):
         self.evaluations = self.medium.n_evaluations
-        self._wrap("state")
-        self._wrap("states")
+        self.wrapped = [n for n in ("state", "states", "T_rho_u") if hasattr(self.medium, n)]
+        for name in self.wrapped:
+            self._wrap(name)
         return self
 
     def __exit__(self, *exc):
-        del self.medium.state
-        del self.medium.states
+        for name in self.wrapped:
+            delattr(self.medium, name)
         self.evaluations = self.medium.n_evaluations - self.evaluations
 
 
