@@ -79,22 +79,17 @@ def main(argv=None):
         )
         per_call /= 2000
 
+        # the same problem and options for dnasim and IDA
+        problem = (residual, (0, p["t_end"]), y0, yp0)
+        options = dict(algebraic=p.get("algebraic"), rtol=rtol, atol=atol)
+
         def ours(compiled):
             bdf.KERNELS = compiled
             if not compiled and hasattr(bdf, "_compiled_wrms"):  # the hooks back to numpy
                 bdf._compiled_wrms[0] = None
                 nd.compiled_rescale = None
             return solve_dae(
-                residual,
-                (0, p["t_end"]),
-                y0,
-                yp0,
-                algebraic=p.get("algebraic"),
-                rtol=rtol,
-                atol=atol,
-                calc_initial=False,
-                dense_output=False,
-                throw=True,
+                *problem, calc_initial=False, dense_output=False, throw=True, **options
             )
 
         cols = []
@@ -103,18 +98,7 @@ def main(argv=None):
             s = r.stats
             cols.append((cpu - s["residual_evals"] * per_call) / s["steps"])
         bdf.KERNELS = True
-        cpu, run = cpu_best(
-            args.repeat,
-            lambda: solve_with_ida(
-                residual,
-                (0, p["t_end"]),
-                y0,
-                yp0,
-                algebraic=p.get("algebraic"),
-                rtol=rtol,
-                atol=atol,
-            ),
-        )
+        cpu, run = cpu_best(args.repeat, lambda: solve_with_ida(*problem, **options))
         si = run.stats
         ida = (cpu - si["residual_evals"] * per_call) / si["steps"]
         print(
