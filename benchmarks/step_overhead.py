@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -39,18 +38,6 @@ from dnasim.solver import nordsieck as nd  # noqa: E402
 from dnasim.testing.ida import solve_with_ida  # noqa: E402
 
 CASES = [("Robertson", 1e-6), ("Akzo Nobel", 1e-6), ("HIRES", 1e-6), ("Transistor amp", 1e-4)]
-
-
-def cpu_best(repeat, fn):
-    """Best CPU time of ``repeat`` calls after one untimed call (scikit-sundae's first
-    two runs in a process take 4 times longer than the later ones: measured)."""
-    fn()
-    best, out = np.inf, None
-    for _ in range(repeat):
-        start = time.process_time()
-        out = fn()
-        best = min(best, time.process_time() - start)
-    return best, out
 
 
 def main(argv=None):
@@ -74,7 +61,7 @@ def main(argv=None):
         y0, yp0 = svp.consistent_start(p)
         yp_probe = np.zeros_like(y0) if yp0 is None else yp0
         atol = rtol * p["atol_scale"]
-        per_call, _ = cpu_best(
+        per_call, _ = svp.best_of(
             args.repeat, lambda: [residual(0.0, y0, yp_probe) for _ in range(2000)]
         )
         per_call /= 2000
@@ -94,11 +81,11 @@ def main(argv=None):
 
         cols = []
         for compiled in (False, True):
-            cpu, r = cpu_best(args.repeat, lambda compiled=compiled: ours(compiled))
+            cpu, r = svp.best_of(args.repeat, lambda compiled=compiled: ours(compiled))
             s = r.stats
             cols.append((cpu - s["residual_evals"] * per_call) / s["steps"])
         bdf.KERNELS = True
-        cpu, run = cpu_best(args.repeat, lambda: solve_with_ida(*problem, **options))
+        cpu, run = svp.best_of(args.repeat, lambda: solve_with_ida(*problem, **options))
         si = run.stats
         ida = (cpu - si["residual_evals"] * per_call) / si["steps"]
         print(
