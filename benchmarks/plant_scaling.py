@@ -1,6 +1,6 @@
 """Scaling of the plant model: a steam pipe split into N volumes, inlet temperature step.
 
-    .venv/bin/python benchmarks/plant_scaling.py                 # N = 10 30 100 300 1000
+    .venv/bin/python benchmarks/plant_scaling.py                 # N = 10 30 100 300 1000 3000
     .venv/bin/python benchmarks/plant_scaling.py --sizes 10 30   # quick run
     .venv/bin/python benchmarks/plant_scaling.py --no-ida
 
@@ -171,7 +171,7 @@ def run(n, solver, rtol=1e-6, linsolver=None):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 300, 1000])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 300, 1000, 3000])
     ap.add_argument("--no-ida", action="store_true", help="skip the IDA comparison")
     ap.add_argument("--json", help="also write the rows to this JSON file")
     args = ap.parse_args(argv)
