@@ -10,7 +10,10 @@
    ones (a harmonic mean over the node graph, ``_interpolated_pressures``). What is still missing
    defaults to p = 1e5 Pa and h = h(1e5 Pa, 293.15 K) of the node's fluid.
 3. Components fill their own variables (``Component.initial_guess``) in flow
-   order (sources first), so a component sees its upstream neighbours' guesses.
+   order (sources first), so a component sees its upstream neighbours' guesses;
+   for the steady start each then moves them towards its steady state
+   (``Component.steady_guess``: a heated pipe marches its heat balance from the
+   inlet, a mixing volume mixes its inflows), so the Newton iteration starts nearer.
 """
 
 from __future__ import annotations
@@ -104,13 +107,16 @@ def _interpolated_pressures(system, p_known: dict) -> dict:
     return {n: float(p) for n, p in zip(np.array(nodes)[free], p_u, strict=True)}
 
 
-def initial_guess(system, t0: float, interpolate: bool = False) -> np.ndarray:
+def initial_guess(
+    system, t0: float, interpolate: bool = False, steady: bool = False
+) -> np.ndarray:
     """The starting point y [SI] at t0. ``interpolate``: unguessed node pressures
     between the guessed ones (``_interpolated_pressures``; the steady start's
     second try, ``dnasim.start``), otherwise copied from a neighbour along the
     streams. Never for a given start: there the node guesses set the components'
     initial states (a volume's mass M = V rho(p, h)), so they are part of the
-    plant's initial condition."""
+    plant's initial condition. ``steady``: for the steady start, each component's
+    ``steady_guess`` follows its ``initial_guess`` (a heated pipe's marched enthalpies)."""
     y = np.zeros(system.n)
     p_guess, h_guess = {}, {}
     p_rank, h_rank = {}, {}
@@ -161,5 +167,7 @@ def initial_guess(system, t0: float, interpolate: bool = False) -> np.ndarray:
         b = by_name[name]
         x = b.local(y)
         b.comp.initial_guess(t0, x)
+        if steady:
+            b.comp.steady_guess(t0, x)
         y[b.gidx] = x.data
     return y

@@ -27,7 +27,7 @@ def initial_values(system, t0: float = 0.0, start: str = "steady"):
     if start not in ("steady", "given"):
         raise PlantError(f"start must be 'steady' or 'given', got {start!r}")
     system.reset_modes()
-    y = initial_guess(system, t0)
+    y = initial_guess(system, t0, steady=start == "steady")
     yp = np.zeros(system.n)
     unknown = ~system.accumulator if start == "steady" else system.algebraic.copy()
     what = f"{start} start of plant '{system.name}'"
@@ -79,7 +79,7 @@ def _steady_from_interpolated_guess(system, t0, unknown, what, first):
     from dnasim.initialization import solve_mixed
 
     system.reset_modes()
-    y = initial_guess(system, t0, interpolate=True)
+    y = initial_guess(system, t0, interpolate=True, steady=True)
     try:
         return solve_mixed(system, t0, y, np.zeros(system.n), unknown, what=what)
     except PlantError:

@@ -204,6 +204,21 @@ class Attemperator(Component):
         P = self.params
         p = P["p0"] if P["p0"] is not None else x["outlet.p"]
         h = self.medium.h_pT(p, P["T0"]) if P["T0"] is not None else x["outlet.h"]
+        self._fill_guess(x, p, h)
+
+    def steady_guess(self, t0, x):
+        """The steady start's guess (``Component.steady_guess``): without T0, the volume
+        holds the mix of its guessed inflows, h_v = (m_steam h_steam + m_water h_water) /
+        (m_steam + m_water) [J/kg] (the steady state of the class doc)."""
+        if self.params["T0"] is not None:
+            return
+        ms, mw = x["m_steam"], x["m_water"]
+        h = (ms * x["steam_in.h"] + mw * x["water_in.h"]) / (ms + mw)
+        self._fill_guess(x, x["p_v"], h)
+
+    def _fill_guess(self, x, p, h):
+        """Every guess from the volume's p [Pa] and h [J/kg]."""
+        P = self.params
         x["outlet.p"], x["outlet.h"] = p, h
         x["p_v"], x["h_v"] = p, h
         x["water_in.p"] = p

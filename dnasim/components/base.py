@@ -727,6 +727,14 @@ class Component:
         the initial state (the parameters that define it, e.g. a pipe's T0, are
         documented per component)."""
 
+    def steady_guess(self, t0: float, x: LocalVector) -> None:
+        """Hook for the steady start only: move the guesses of ``initial_guess`` towards
+        the steady state (a heated pipe marches its enthalpies from the inlet, a mixing
+        volume takes the mix of its inflows), so that the start's Newton iteration needs
+        fewer steps. Called right after ``initial_guess``, in flow order (the node values
+        in x are the upstream components' guesses). Not called for a given start, whose
+        initial state ``initial_guess`` defines. Default: nothing."""
+
     def reset_discrete_state(self, modes: dict) -> None:
         """Hook: put the discrete modes back to their default before a simulation.
 

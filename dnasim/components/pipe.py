@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from dnasim.components.base import Component, Equation, FluidPort, Output, Param, Variable
@@ -13,7 +15,7 @@ from dnasim.components.physics import (
     has_phase_branches,
     is_condensable,
 )
-from dnasim.errors import PlantError
+from dnasim.errors import PlantError, ResidualDomainError
 
 
 class Pipe(Component):
@@ -421,6 +423,31 @@ class Pipe(Component):
             h = np.array([self.medium.h_pT(pi, P["T0"]) for pi in p])
         else:
             h = h_in + (x["outlet.h"] - h_in) * frac
+        self._fill_guess(t0, x, p, h)
+
+    def steady_guess(self, t0, x):
+        """The steady start's guess (``Component.steady_guess``) of a pipe without T0 and
+        without a layered wall model: at the flow m_nominal, the enthalpies marched from
+        the inlet through a fixed wall's heat (``heated_guess``), or the inlet enthalpy in
+        every volume when no heat flows at rest (a storage wall, C dT_w/dt = Q = 0, or
+        no wall)."""
+        P = self.params
+        if P["T0"] is not None or self.wall_model is not None:
+            return
+        p = np.array(x[self.channel.pv], dtype=float)
+        h = np.full(self.n, x["inlet.h"])
+        if self.fixed_wall and P["kA"] > 0:
+            h = self.heated_guess(p, x["inlet.h"], self.param_at("T_wall", t0), P["m_nominal"])
+            if h is None:
+                return
+        self._fill_guess(t0, x, p, h)
+        if self.fixed_wall:  # Q[i] = -m (h_i - h_a): the heat of the march [W]
+            x["Q"] = -P["m_nominal"] * np.diff(np.concatenate(([x["inlet.h"]], h)))
+
+    def _fill_guess(self, t0, x, p, h):
+        """The guesses of every variable from the volumes' p [Pa] and h [J/kg]."""
+        P = self.params
+        n = self.n
         T = self.channel.guess(x, self.medium, p, h, P["m_nominal"])
         if self.wall_model is not None:
             T_w0 = np.full(n, P["T_wall0"]) if P["T_wall0"] is not None else T
@@ -432,6 +459,34 @@ class Pipe(Component):
             x["T_w"] = P["T_wall0"]
         else:
             x["T_w"] = T
+
+    def heated_guess(self, p, h_in, T_wall, m):
+        """Steady enthalpies h_i [J/kg] of the volumes of a pipe heated by a fixed wall at
+        T_wall [K], marched from the inlet state (p[0], h_in) volume by volume at the
+        flow m [kg/s] (the steady start's guess, ``initial_guess``); None when a state is
+        out of the medium's range. Per volume, with the inflow state a (T_a, c_p,a) and
+        NTU_i = kA_i / (m c_p,a), the steady heat balance m (h_i - h_a) = -Q_i with
+        Q_i = kA_i LMTD(T_a - T_wall, T_i - T_wall) has, for constant c_p, the solution
+        T_i - T_wall = (T_a - T_wall) exp(-NTU_i), i.e.
+
+            h_i = h_a + (kA_i / m) (T_wall - T_a) (1 - exp(-NTU_i)) / NTU_i
+
+        which never passes T_wall, and is the explicit step kA_i (T_wall - T_a) / m for
+        NTU_i -> 0 (c_p = inf in the two-phase dome)."""
+        kA_i = self.params["kA"] / self.n
+        h = np.empty(len(p))
+        h_a = float(h_in)
+        p_a = np.concatenate(([p[0]], p[:-1]))  # the inflow's pressure: the volume upstream
+        try:
+            for i in range(len(p)):
+                s = self.medium.state(float(p_a[i]), h_a)
+                ntu = kA_i / (m * s.cp) if np.isfinite(s.cp) and s.cp > 0 else 0.0
+                factor = -math.expm1(-ntu) / ntu if ntu > 0 else 1.0
+                h_a = h_a + kA_i / m * (T_wall - s.T) * factor
+                h[i] = h_a
+        except ResidualDomainError:
+            return None
+        return h if np.all(np.isfinite(h)) else None
 
 
 class PipeBatch:
