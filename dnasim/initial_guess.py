@@ -107,9 +107,7 @@ def _interpolated_pressures(system, p_known: dict) -> dict:
     return {n: float(p) for n, p in zip(np.array(nodes)[free], p_u, strict=True)}
 
 
-def initial_guess(
-    system, t0: float, interpolate: bool = False, steady: bool = False
-) -> np.ndarray:
+def initial_guess(system, t0: float, interpolate: bool = False, steady: bool = False) -> np.ndarray:
     """The starting point y [SI] at t0. ``interpolate``: unguessed node pressures
     between the guessed ones (``_interpolated_pressures``; the steady start's
     second try, ``dnasim.start``), otherwise copied from a neighbour along the
