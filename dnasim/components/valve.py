@@ -104,11 +104,6 @@ class Valve(Component):
         dp = x["inlet.p"] - x["outlet.p"]
         return x["m"] - valve_flow(self.params["C"], self.opening(t, x), dp, self.params["dp_reg"])
 
-    def steady_guess(self, t0, x):
-        """The steady start's guess (``Component.steady_guess``): throttling is
-        isenthalpic, so in forward flow the outlet node gets the inlet's h [J/kg]."""
-        x["outlet.h"] = x["inlet.h"]
-
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
         z = self.opening(t0, x) if not self.opening_from_signal else 0.5
