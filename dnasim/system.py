@@ -548,20 +548,50 @@ class System:
     def output_row(self, t, y, yp) -> np.ndarray:
         """One output row (order of ``output_names()``) from (t, y, y')."""
         y = np.asarray(y, dtype=float)
-        row = [y]
         node_T = np.full(len(self.node_names), np.nan)
         for medium, pos, kp in self._node_groups():
             # one property call per medium for all its nodes; nan where out of range
             r = medium.states(y[kp], y[kp + 1], check=False)
             node_T[pos] = np.where(r.ok, r.T, np.nan)
-        row.append(node_T)
-        out_blocks = self.__dict__.get("_output_blocks")
-        if out_blocks is None:  # the blocks with derived outputs, found once
-            out_blocks = self._output_blocks = [b for b in self.blocks if b.comp.outputs()]
-        for b in out_blocks:
-            vals = b.comp.output_values(t, b.local(y), b.local(yp))
-            row.append(np.asarray(vals, dtype=float))
-        return np.concatenate(row)
+        plan = self.__dict__.get("_output_plan")
+        if plan is None:
+            plan = self._output_plan = self._make_output_plan()
+        units, size = plan
+        out = np.empty(size)
+        out[: self.n] = y
+        out[self.n : self.n + node_T.size] = node_T
+        for unit, where in units:
+            if type(unit) is ComponentBlock:
+                out[where] = unit.comp.output_values(t, unit.local(y), unit.local(yp))
+            else:
+                out[where] = unit.output_values(t, y, yp)
+        return out
+
+    def _make_output_plan(self):
+        """([(unit, positions in the row)], row length): the blocks with derived
+        outputs, with alike pipes in one batch (``evaluation_units``) when the batch
+        offers ``output_values`` (its components' values, one after the other), and
+        where each unit's values go (a slice for a block, an index array for a batch)."""
+        start = self.n + len(self.node_names)
+        where, out_blocks = {}, []
+        for b in self.blocks:
+            k = len(b.comp.outputs())
+            if k:
+                out_blocks.append(b)
+                where[b.comp.name] = slice(start, start + k)
+                start += k
+        units = []
+        for u in evaluation_units(out_blocks):
+            if type(u) is ComponentBlock:
+                units.append((u, where[u.comp.name]))
+            elif not hasattr(u, "output_values"):
+                units += [(b, where[b.comp.name]) for b in u.blocks]
+            else:
+                pos = [
+                    np.arange(where[b.comp.name].start, where[b.comp.name].stop) for b in u.blocks
+                ]
+                units.append((u, np.concatenate(pos)))
+        return units, start
 
 
 def evaluation_units(blocks) -> list:

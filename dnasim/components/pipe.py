@@ -14,6 +14,7 @@ from dnasim.components.physics import (
     M_REG_REL,
     has_phase_branches,
     is_condensable,
+    upwind_weight,
 )
 from dnasim.errors import PlantError, ResidualDomainError
 
@@ -440,7 +441,12 @@ class Pipe(Component):
             h = self.heated_guess(p, x["inlet.h"], self.param_at("T_wall", t0), P["m_nominal"])
             if h is None:
                 return
-        self._fill_guess(t0, x, p, h)
+        before = x.data.copy()
+        try:
+            self._fill_guess(t0, x, p, h)
+        except ResidualDomainError:  # a state the medium's array call refuses: keep the guess
+            x.data[:] = before
+            return
         if self.fixed_wall:  # Q[i] = -m (h_i - h_a): the heat of the march [W]
             x["Q"] = -P["m_nominal"] * np.diff(np.concatenate(([x["inlet.h"]], h)))
 
@@ -562,6 +568,77 @@ class PipeBatch:
         self.C_i = np.concatenate(
             [np.full(b.comp.n, b.comp.params["C_wall"] / b.comp.n) for b in self.blocks]
         )
+        self._outputs = None  # the index arrays of ``output_values``, made on first use
+
+    def _output_layout(self):
+        """Index arrays of ``output_values``: the end faces of each pipe, its pipes
+        grouped by volume count (for the sums), and where each output comes from."""
+        k = len(self.blocks)
+        ends, left, eps = [], [], []
+        for b, seg in zip(self.blocks, self.segments, strict=True):
+            m_at = b.gidx[b.index["m"]]
+            ends += [m_at[0], m_at[-1]]  # faces 0 and n
+            left += [seg.start, seg.stop - 2]  # the state left of each: S_0 and S_n
+            eps += [b.comp.channel.m_eps] * 2
+        groups = {}  # volume count -> positions of its pipes
+        for i, b in enumerate(self.blocks):
+            groups.setdefault(b.comp.n, []).append(i)
+
+        def rows_of(name, members):
+            return np.array([self.blocks[i].gidx[self.blocks[i].index[name]] for i in members])
+
+        sums = [
+            (np.array(members), *(rows_of(name, members) for name in ("M", "U", "T_w", "Q")))
+            for members in groups.values()
+        ]
+        # the pool of ``output_values``: T of every state (the segments), then per pipe
+        # M_total, U_total, E_wall, Q_total, then E at the end faces (two per pipe)
+        n_T = self.segments[-1].stop
+        src = []
+        for i, (b, seg) in enumerate(zip(self.blocks, self.segments, strict=True)):
+            n = b.comp.n
+            src += [seg.start, seg.start + n]  # T_in = T[0], T_out = T[-2]
+            src += [n_T + j * k + i for j in range(4)]  # M_total, U_total, E_wall, Q_total
+            src += [n_T + 4 * k + 2 * i, n_T + 4 * k + 2 * i + 1]  # E_in, E_out
+            src += range(seg.start + 1, seg.start + n + 1)  # T[1:-1]
+        C_i = np.array([b.comp.params["C_wall"] / b.comp.n for b in self.blocks])
+        return (
+            np.array(ends, dtype=np.intp),
+            np.array(left, dtype=np.intp),
+            np.array(eps),
+            sums,
+            C_i,
+            np.array(src, dtype=np.intp),
+        )
+
+    def output_values(self, t, y, yp) -> np.ndarray:
+        """Every pipe's ``Pipe.output_values``, pipe after pipe, as one array: the same
+        property calls (each pipe's own, ``Channel.state_properties``), the port energy
+        flows E[0], E[n] over the end faces of all pipes at once, and the sums over
+        the pipes with one volume count as one 2-D sum (each row the pairwise sum
+        ``np.sum`` makes of it), so every value is ``Pipe.output_values``' to the bit
+        (tests/test_output_rows.py)."""
+        if self._outputs is None:
+            self._outputs = self._output_layout()
+        ends, left, eps, groups, C_i, src = self._outputs
+        p = y[self.p_at]
+        h = y[self.h_at]
+        T = np.concatenate(
+            [
+                b.comp.channel.state_properties(b.comp.medium, p[seg], h[seg], b.modes)[0]
+                for b, seg in zip(self.blocks, self.segments, strict=True)
+            ]
+        )
+        k = len(self.blocks)
+        sums = np.empty((4, k))  # M_total, U_total, E_wall, Q_total
+        for members, M_at, U_at, Tw_at, Q_at in groups:
+            sums[0, members] = y[M_at].sum(axis=1)
+            sums[1, members] = y[U_at].sum(axis=1)
+            sums[2, members] = C_i[members] * y[Tw_at].sum(axis=1)
+            sums[3, members] = y[Q_at].sum(axis=1)
+        m = y[ends]
+        E = upwind_weight(m, eps) * h[left] - upwind_weight(-m, eps) * h[left + 1]
+        return np.concatenate((T, sums.ravel(), E))[src]
 
     def residual_into(self, t, y, yp, F) -> None:
         """F[rows of the pipes] = their residuals at (t, y, y') (global vectors)."""
