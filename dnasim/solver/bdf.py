@@ -234,6 +234,7 @@ class NordsieckBDF:
         else:
             self._kernels_at = math.inf
         self.newton_ss = 20.0  # IDA's initial convergence-rate factor
+        self._f_nonfinite = False  # the last _newton met a non-finite predictor residual
         self.jacobian_current = False
         self.failure = StepFailure()
         # predicted_crossing(t_a, t_b) -> the earliest crossing time of a restart switch
@@ -401,9 +402,7 @@ class NordsieckBDF:
                 yp_pred = None
             cj = nd.harmonic(q) / h
             t_res = np.nextafter(t_new, -np.inf) if (left_limit and t_new == t_stop) else t_new
-            converged, y, yp, delta = self._correct(
-                t_res, z_pred, cj, h, weights, newton_weights, yp_pred
-            )
+            converged, y, yp = self._correct(t_res, z_pred, cj, h, weights, newton_weights, yp_pred)
             if not converged:
                 self.stats.rejected_newton += 1
                 n_newton_fail += 1
@@ -415,7 +414,13 @@ class NordsieckBDF:
                 self.steps_at_this_order = 0
                 self._change_step(self._eta_after_newton_failure(t_new, h))
                 continue
-            error = nd.error_coefficient(q) * self.norm(delta, error_weights)
+            if self._dot_ok:  # Delta and its norm in one compiled call, the same numbers
+                delta = np.empty(self.n)
+                enorm = self._kernels.delta_wrms(y, z_pred[0], error_weights, delta)
+            else:
+                delta = y - z_pred[0]
+                enorm = self.norm(delta, error_weights)
+            error = nd.error_coefficient(q) * enorm
             if error > 1.0 and not self.fixed_step:
                 self.stats.rejected_error += 1
                 n_error_fail += 1
@@ -527,7 +532,7 @@ class NordsieckBDF:
 
     # -- the corrector ---------------------------------------------------------------------
     def _correct(self, t, z_pred, cj, h, weights, newton_weights, yp_pred=None):
-        """Modified Newton for the corrector; returns (converged, y, yp, Delta).
+        """Modified Newton for the corrector; returns (converged, y, yp).
 
         ``weights``: the error weights of every component (the finite-difference
         increments); ``newton_weights``: those of the convergence norm (0 for the
@@ -560,34 +565,37 @@ class NordsieckBDF:
             yp = yp_pred.copy()
             try:
                 f = self.residual(t, y, yp)
-                if not all_finite(f):
-                    self._note_nonfinite(t, f)
-                    return False, None, None, None
                 refresh = (
                     self.matrix.matrix is None
                     or not (CJ_RATIO_REFRESH < cj / self.matrix.cj < 1.0 / CJ_RATIO_REFRESH)
                     or (attempt == 1)
                 )
                 if refresh:
+                    if not all_finite(f):
+                        self._note_nonfinite(t, f)
+                        return False, None, None
                     self._new_matrix(t, y, yp, f, cj, h, weights)
+                # with the kept matrix a non-finite f shows in the first update (_newton)
                 converged, y, yp = self._newton(t, y, yp, f, cj, newton_weights, fresh=refresh)
+                if self._f_nonfinite:
+                    return False, None, None
             except ResidualDomainError as exc:
                 self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
                 converged = False
                 if self.jacobian_current:
-                    return False, None, None, None
+                    return False, None, None
                 self.jacobian_current = False
                 continue
             if converged:
-                return True, y, yp, y - y_pred
+                return True, y, yp
             if self.jacobian_current:
                 if self._slow_but_converging:
                     return self._full_newton_from(
-                        t, y_pred, yp_pred, y_pred, yp_pred, cj, h, weights, newton_weights
+                        t, y_pred, yp_pred, cj, h, weights, newton_weights
                     )
-                return False, None, None, None
+                return False, None, None
             # Slow or failed with an old matrix: retry once with a fresh one.
-        return False, None, None, None
+        return False, None, None
 
     def _last_chance(self, t, y_pred, yp_pred, cj, h, weights, newton_weights):
         """The corrector from the predictor with the algebraic unknowns at their last
@@ -618,34 +626,30 @@ class NordsieckBDF:
             f = self.residual(t, y, yp)
             if not all_finite(f):
                 self._note_nonfinite(t, f)
-                return False, None, None, None
+                return False, None, None
             self._new_matrix(t, y, yp, f, cj, h, weights)
             converged, y, yp = self._newton(t, y, yp, f, cj, newton_weights, fresh=True)
         except ResidualDomainError as exc:
             self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
-            return False, None, None, None
+            return False, None, None
         if converged:
-            return True, y, yp, y - y_pred
+            return True, y, yp
         if self._slow_but_converging:
-            return self._full_newton_from(
-                t, y_start, yp_start, y_pred, yp_pred, cj, h, weights, newton_weights
-            )
-        return False, None, None, None
+            return self._full_newton_from(t, y_start, yp_start, cj, h, weights, newton_weights)
+        return False, None, None
 
-    def _full_newton_from(
-        self, t, y_start, yp_start, y_pred, yp_pred, cj, h, weights, newton_weights
-    ):
-        """``_full_newton`` from (y_start, yp_start): (converged, y, yp, Delta = y - y_pred)."""
+    def _full_newton_from(self, t, y_start, yp_start, cj, h, weights, newton_weights):
+        """``_full_newton`` from (y_start, yp_start): (converged, y, yp)."""
         try:
             y, yp = y_start.copy(), yp_start.copy()
             f = self.residual(t, y, yp)
             converged, y, yp = self._full_newton(t, y, yp, f, cj, h, weights, newton_weights)
         except ResidualDomainError as exc:
             self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
-            return False, None, None, None
+            return False, None, None
         if converged:
-            return True, y, yp, y - y_pred
-        return False, None, None, None
+            return True, y, yp
+        return False, None, None
 
     def _full_newton(self, t, y, yp, f, cj, h, weights, newton_weights):
         """Newton with a fresh matrix every iteration (see ``_correct``)."""
@@ -704,6 +708,7 @@ class NordsieckBDF:
         self.newton_ss = max(self.newton_ss, c / (1.0 - c))
         first_norm = None
         self._slow_but_converging = False
+        self._f_nonfinite = False
         kernels = self._kernels
         lu = self.matrix.dense_lu() if self._small_dense else None
         for m in range(max_iters):
@@ -735,8 +740,9 @@ class NordsieckBDF:
                 # A NaN or inf in f makes the update non-finite (every x_i of the LU
                 # solve involves b_i; 0 * inf is NaN): the residuals of the iterations
                 # are checked here, not after each evaluation (0.6 us a call, measured).
-                if m > 0 and not all_finite(f):
+                if not all_finite(f):
                     self._note_nonfinite(t, f)
+                    self._f_nonfinite = m == 0  # the predictor's: no retry (``_correct``)
                 else:
                     self.failure = StepFailure("the Newton update is not finite")
                 return False, y, yp

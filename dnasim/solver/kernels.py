@@ -12,7 +12,8 @@ call BLAS's ddot from the loop (numba's np.dot), the routine numpy calls.
 Loops: ``weights``, ``predict`` (P z and y'_pred), ``newton_update`` (and
 ``newton_update_lu`` with the dense LU solve ``lu_solve_small`` inside), ``correct``
 (z = z_pred + l Delta), ``rescale`` (row j times ratio^j), ``wrms`` (the norm) and
-``wrms_order_errors`` (the two norms of the order choice in one call).
+``delta_wrms`` (Delta = y - y_pred and its norm), ``wrms_order_errors`` (the two
+norms of the order choice in one call).
 
 ``newton_update`` (one modified-Newton update, after the LU solve x = J^-1 F):
 
@@ -166,6 +167,19 @@ def weights(y, rtol, atol, out):
 
 
 @numba.njit(cache=True, nogil=True)
+def delta_wrms(y, y_pred, w, delta):
+    """delta = y - y_pred (Milne's Delta) and wrms(delta, w) in one call, each
+    formed as numpy forms them (the difference rounded, then the product, then
+    BLAS's ddot)."""
+    n = y.size
+    vw = np.empty(n)
+    for i in range(n):
+        delta[i] = y[i] - y_pred[i]
+        vw[i] = delta[i] * w[i]
+    return math.sqrt(np.dot(vw, vw) / n)
+
+
+@numba.njit(cache=True, nogil=True)
 def wrms_order_errors(zq, delta, delta_prev, w):
     """(wrms(z_q, w), wrms(delta - delta_prev, w)) in one call: the two norms of the
     order choice (``bdf.NordsieckBDF._choose_next``), each formed as numpy forms it
@@ -203,6 +217,9 @@ def dot_matches_numpy() -> bool:
             dw, y1, y2 = np.empty(n), np.empty(n), np.empty(n)
             ss = newton_update(d, 0.7, v, v, 3.0, w, y1, y2, dw)
             ok = ok and ss == dw.dot(dw)
+            delta = np.empty(n)
+            ok = ok and delta_wrms(v, d, w, delta) == wrms(v - d, w)
+            ok = ok and np.array_equal(delta, v - d)
             e_down, e_up = wrms_order_errors(v, d, w, w)
             vw, dd = v * w, (d - w) * w
             ok = ok and e_down == math.sqrt(vw.dot(vw) / n)
