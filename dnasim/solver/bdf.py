@@ -377,9 +377,9 @@ class NordsieckBDF:
         while True:
             q, h = self.q, self.h
             if (
-                not reinitialized
+                n_newton_fail + n_error_fail >= REINIT_AFTER_FAILURES
+                and not reinitialized
                 and self.reinitialize is not None
-                and n_newton_fail + n_error_fail >= REINIT_AFTER_FAILURES
                 and h < REINIT_STEP_RATIO * self.h_used
             ):
                 reinitialized = True
@@ -392,7 +392,8 @@ class NordsieckBDF:
                 t_new = t_stop
             else:
                 t_new = self.t + h
-            self._check_step_size(h, t_new)
+            if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not math.isfinite(h):
+                self._step_size_failure(h, t_new)
             if self._predict is not None:
                 yp_pred = np.empty(self.n)
                 self._predict(nd.pascal_matrix(q), self.z, q, h, self._z_pred, yp_pred)
@@ -507,13 +508,10 @@ class NordsieckBDF:
                 eta = min(max(eta_c, 1e-3), 0.9)
         return eta
 
-    def _check_step_size(self, h, t_new) -> None:
-        if h <= 4.0 * EPS * max(abs(self.t), abs(t_new)) or not math.isfinite(h):
-            raise DAEError(
-                self._failure_message(
-                    t_new, h, f"the step size fell to round-off level (h = {h:.3g})"
-                )
-            )
+    def _step_size_failure(self, h, t_new) -> None:
+        raise DAEError(
+            self._failure_message(t_new, h, f"the step size fell to round-off level (h = {h:.3g})")
+        )
 
     def _accept(self, t_new, z_pred, delta, y, yp) -> None:
         q = self.q
