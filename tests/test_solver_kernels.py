@@ -82,7 +82,7 @@ def test_weights_correct_rescale_wrms_are_the_numpy_ones(n):
 
 
 @pytest.mark.parametrize("n", [1, 3, 8, 16, 7015])
-def test_order_error_norms_are_the_numpy_ones(n):
+def test_error_norms_are_the_numpy_ones(n):
     # bdf._choose_next's two norms in one call: numpy rounds delta - delta_prev, then
     # the product with w, then sums by BLAS's ddot; the loop must do the same.
     if not kernels.dot_matches_numpy():
@@ -93,6 +93,12 @@ def test_order_error_norms_are_the_numpy_ones(n):
     a, b = zq * w, (delta - delta_prev) * w
     assert e_down == math.sqrt(a.dot(a) / n)
     assert e_up == math.sqrt(b.dot(b) / n)
+    # bdf.step's Delta = y - y_pred and its error norm in one call
+    y, y_pred, delta = _vec(n), _vec(n), np.empty(n)
+    enorm = kernels.delta_wrms(y, y_pred, w, delta)
+    assert np.array_equal(delta, y - y_pred)
+    c = (y - y_pred) * w
+    assert enorm == math.sqrt(c.dot(c) / n)
 
 
 @pytest.mark.parametrize("n", [3, 8, 7015])
