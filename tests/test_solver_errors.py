@@ -53,6 +53,26 @@ def test_residual_returning_nan_fails_with_time_and_component():
     assert not partial.success and partial.t[-1] <= 0.5 and partial.t[-1] > 0.49
 
 
+def test_nan_in_a_newton_iterate_names_the_equation():
+    # NaN on every second call after t = 0.5: at predictors and at Newton iterates
+    # (both occur in this run). At an iterate the corrector sees it through the
+    # non-finite update that follows (bdf._newton); either way the message must name
+    # the equation, not only say "not finite".
+    calls = {"n": 0}
+
+    def residual(t, y, yp):
+        f = yp + y
+        calls["n"] += 1
+        if t > 0.5 and calls["n"] % 2 == 0:
+            f[1] = np.nan
+        return f
+
+    with pytest.raises(DAEError) as info:
+        solve_dae(residual, (0, 1), [1.0, 1.0], rtol=1e-6, throw=True)
+    message = str(info.value)
+    assert "returned NaN or inf" in message and "equation(s) 1" in message
+
+
 def test_domain_error_is_recovered_by_a_smaller_step():
     """sqrt(y) with y -> 0: predictions below 0 raise, the solver cuts the step and goes on."""
 

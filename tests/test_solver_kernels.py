@@ -59,9 +59,9 @@ def test_newton_update_is_the_numpy_update(n):
 @pytest.mark.parametrize("n", [2, 8, 7015])
 def test_weights_correct_rescale_wrms_are_the_numpy_ones(n):
     y, atol = _vec(n), 10.0 ** RNG.uniform(-10, 0, n)
-    assert np.array_equal(
-        kernels.weights(y, 1e-6, atol, np.empty(n)), 1.0 / (1e-6 * np.abs(y) + atol)
-    )
+    w = np.empty(n)
+    kernels.weights(y, 1e-6, atol, w)
+    assert np.array_equal(w, 1.0 / (1e-6 * np.abs(y) + atol))
     for q in range(1, nd.MAX_ORDER + 1):
         z_pred, delta = RNG.standard_normal((7, n)), _vec(n)
         z = np.zeros((7, n))
@@ -79,6 +79,26 @@ def test_weights_correct_rescale_wrms_are_the_numpy_ones(n):
         v, w = _vec(n), 10.0 ** RNG.uniform(-6, 6, n)
         vw = v * w
         assert kernels.wrms(v, w) == math.sqrt(vw.dot(vw) / vw.size)
+
+
+@pytest.mark.parametrize("n", [1, 3, 8, 16, 7015])
+def test_error_norms_are_the_numpy_ones(n):
+    # bdf._choose_next's two norms in one call: numpy rounds delta - delta_prev, then
+    # the product with w, then sums by BLAS's ddot; the loop must do the same.
+    if not kernels.dot_matches_numpy():
+        pytest.skip("this BLAS's ddot is not numba's: the step keeps numpy's norms")
+    zq, delta, delta_prev = _vec(n), _vec(n), _vec(n)
+    w = 10.0 ** RNG.uniform(-6, 6, n)
+    e_down, e_up = kernels.wrms_order_errors(zq, delta, delta_prev, w)
+    a, b = zq * w, (delta - delta_prev) * w
+    assert e_down == math.sqrt(a.dot(a) / n)
+    assert e_up == math.sqrt(b.dot(b) / n)
+    # bdf.step's Delta = y - y_pred and its error norm in one call
+    y, y_pred, delta = _vec(n), _vec(n), np.empty(n)
+    enorm = kernels.delta_wrms(y, y_pred, w, delta)
+    assert np.array_equal(delta, y - y_pred)
+    c = (y - y_pred) * w
+    assert enorm == math.sqrt(c.dot(c) / n)
 
 
 @pytest.mark.parametrize("n", [3, 8, 7015])
