@@ -16,8 +16,9 @@ atol vector; dnasim leaves the algebraic variables out of its error test, as
 Printed per N: unknowns, CPU time (``time.process_time``: the machine
 is shared, so wall time is noise) per simulated second, steps, residual
 evaluations, property calls (calls of ``medium.state``, ``medium.states`` and
-``medium.T_rho_u``, the pipes' lean call, cache hits included) and the states the backend computed ("prop pts",
-``medium.n_evaluations``), the share of the run's wall time spent inside property calls,
+``medium.T_rho_u``, the pipes' lean call, cache hits included) and the states the
+backend computed ("prop pts", ``medium.n_evaluations``), the share of the run's wall
+time spent inside property calls,
 T_out at t_end, and the ratio of the CPU times IDA/dnasim (> 1: dnasim faster).
 ``--json FILE`` also writes the rows (T_out to full precision) for comparing two
 versions.
