@@ -213,6 +213,8 @@ class Attemperator(Component):
         if self.params["T0"] is not None:
             return
         ms, mw = x["m_steam"], x["m_water"]
+        if not ms + mw > 0.0:  # no inflow guessed (or a reversed one): nothing to mix
+            return
         h = (ms * x["steam_in.h"] + mw * x["water_in.h"]) / (ms + mw)
         self._fill_guess(x, x["p_v"], h)
 
