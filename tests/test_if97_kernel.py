@@ -608,6 +608,27 @@ def test_memo_copies_unchanged_points_and_warm_starts_moved_ones():
             assert np.all(err <= tols.get(f, 5e-10) * np.abs(x[fin]) + 1e-12 * scale), (rel, f)
 
 
+def test_memo_warm_start_that_fails_falls_back_to_the_cold_path():
+    """A point moved far, from compressed liquid (region 1, 200 bar, 1000 kJ/kg, 504 K)
+    to 245 bar and 1750 kJ/kg (region 3, 640 K): the first-order warm start T_w from the
+    remembered state is no start for region 3 and its iteration used to fail (status 7,
+    "no convergence", seen when a steady start's guess moved a supercritical pipe's
+    volumes). The memo call must give the state of a call without memo, to the
+    tolerances of test_memo_copies_unchanged_points_and_warm_starts_moved_ones (both
+    then run the same cold iteration: here to the bit)."""
+    m = NB.PhMemo()
+    P0 = np.array([200e5, 200e5, 235e5])
+    H0 = np.array([1.0e6, 1.1e6, 1.0e6])
+    assert np.all(NB.ph_arrays(P0, H0, memo=m).status == 0)
+    P1 = np.array([245e5, 245e5, 250e5])
+    H1 = np.array([1.75e6, 1.76e6, 1.72e6])
+    warm = NB.ph_arrays(P1, H1, memo=m)
+    cold = NB.ph_arrays(P1, H1)
+    assert np.all(cold.status == 0)
+    for f in ("T", "rho", "u", "s", "cp", "drho_dp_h", "drho_dh_p", "region", "status"):
+        np.testing.assert_array_equal(getattr(warm, f), getattr(cold, f))
+
+
 def test_memo_reproduces_a_point_moved_and_moved_back():
     """A difference quotient evaluates F(y), F(y + d e_j), F(y + d e_k), ...: a point
     moved by one column (its p) and the next (its h) and back at the third must give

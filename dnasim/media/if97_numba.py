@@ -761,7 +761,8 @@ def _ph_memo_loop(p, h, branch, order, F, B, RS, T, rho, u, s, cp, x, dp, dh, re
     A point whose (p, h, branch) equals a remembered one is copied from it; otherwise a
     single-phase point of region 1 or 2 starts its T iteration from the most recent
     state moved to first order, T_w = T' + (h - h')/cp' + (dT/dp)_h' (p - p'), instead
-    of the backward equations, and the result replaces the least recently used slot."""
+    of the backward equations (and from them again if that iteration fails), and the
+    result replaces the least recently used slot."""
     n_slots = order.shape[0]
     computed = 0
     for i in range(p.size):
@@ -794,6 +795,11 @@ def _ph_memo_loop(p, h, branch, order, F, B, RS, T, rho, u, s, cp, x, dp, dh, re
                 if not (T_MIN + 2.0 < Tw < T_25 - 3.0):
                     Tw = math.nan
             r, Tp = _ph_branch(pi, hi, bi, Tw)
+            if r[9] != 0 and Tw == Tw:
+                # the warm start failed (a point moved far, e.g. from region 1 into
+                # region 3, where the first-order T_w is no start): the cold path, as
+                # without a memo
+                r, Tp = _ph_branch(pi, hi, bi, math.nan)
             computed += 1
             _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status)
             rank = n_slots - 1
