@@ -1,8 +1,8 @@
 """The ``dnasim`` program's entry point: the signal handlers first, then the command line.
 
 SIGTERM and SIGINT (Ctrl-C) are caught before anything heavy is imported (this
-module imports only ``gc``, ``os``, ``signal``, ``sys`` and ``dnasim.interrupts``, which
-holds the handlers), so that a signal at any time
+module imports only ``gc``, ``os``, ``signal``, ``sys``, ``dnasim.blas_threads`` (no numpy)
+and ``dnasim.interrupts``, which holds the handlers), so that a signal at any time
 gives one line on stderr and exit code 1, never a silent -15 or a traceback.
 
 Until a command is ready to be interrupted, a signal is *held*: it is recorded and
@@ -24,6 +24,7 @@ import os
 import signal
 import sys
 
+from dnasim.blas_threads import single_threaded_environment
 from dnasim.interrupts import (  # noqa: F401  (re-exported: cli uses entry.*)
     _SIGNALS,
     Terminated,
@@ -37,39 +38,16 @@ from dnasim.interrupts import (  # noqa: F401  (re-exported: cli uses entry.*)
 
 EXIT_INTERRUPTED = 1  # the command line's "simulation failed or interrupted"
 
-#: The BLAS libraries' thread-count variables that the command line sets to 1 unless
-#: the user has set them (OpenBLAS, which numpy's and scipy's wheels bundle; MKL;
-#: Apple's Accelerate).
-BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")
-
-
-def single_threaded_blas(environ=os.environ) -> None:
-    """Give the BLAS libraries one thread each, unless the user chose otherwise.
-
-    Must run before numpy is imported (the pools are made at import). A plant's
-    linear algebra is a band or sparse LU of a few hundred to a few thousand
-    unknowns and vector operations on arrays of that size: a BLAS thread pool does
-    not speed it up, but its idle threads spin after each call, and the pools of
-    numpy's and scipy's two bundled OpenBLAS copies are made at import on every
-    core. On a 2-core machine that was 0.2 to 0.3 s of CPU in a 1 s run of a small
-    plant, with no gain in wall time, and a sweep's Dask workers (started by
-    this process, so with its environment) would each have a pool of their own on
-    the same cores: the over-subscription dask's documentation warns of.
-    ``OPENBLAS_NUM_THREADS=4 dnasim run ...`` still gives a pool of 4. Only the
-    command line does this; ``import dnasim`` leaves the environment alone.
-    """
-    for name in BLAS_THREAD_VARIABLES:
-        environ.setdefault(name, "1")
-
 
 def _message(what: str) -> str:
     return f"dnasim: interrupted ({what}) before the command had done anything"
 
 
 def main(argv=None) -> int:
-    """Run the ``dnasim`` command line with the signal handlers installed first
-    (and one BLAS thread, see :func:`single_threaded_blas`)."""
-    single_threaded_blas()
+    """Run the ``dnasim`` command line with the signal handlers installed first, and
+    one BLAS thread unless the user set a number (before numpy is imported:
+    ``dnasim.blas_threads``)."""
+    single_threaded_environment()
     install()
     # Young-generation collections every 10000 new container objects instead of 700:
     # importing numpy, scipy and numba creates ~10^5 objects that all survive, and each

@@ -1,8 +1,9 @@
-"""The command line's single-threaded BLAS (``dnasim.entry.single_threaded_blas``).
+"""One BLAS thread for simulations unless the user chose a number (``dnasim.blas_threads``).
 
-The setting only works if it is in the environment before numpy is imported (the
-OpenBLAS pools are made at import), so the tests check the value, that a user's
-choice wins, and that the entry module imports no numpy before ``main`` sets it.
+The command line's setting only works if it is in the environment before numpy is
+imported (the OpenBLAS pools are made at import), so the tests check the value, that
+a user's choice wins, and that the entry module imports no numpy before ``main`` sets
+it; ``solve_dae``'s limit is checked from inside a residual of a large system.
 """
 
 from __future__ import annotations
@@ -11,18 +12,27 @@ import os
 import subprocess
 import sys
 
-from dnasim.entry import BLAS_THREAD_VARIABLES, single_threaded_blas
+import numpy as np
+import pytest
+import scipy.sparse
+
+from dnasim.blas_threads import (
+    MIN_UNKNOWNS,
+    THREAD_VARIABLES,
+    one_blas_thread,
+    single_threaded_environment,
+)
 
 
 def test_unset_variables_get_one_thread():
     env = {}
-    single_threaded_blas(env)
-    assert env == {name: "1" for name in BLAS_THREAD_VARIABLES}
+    single_threaded_environment(env)
+    assert env == {name: "1" for name in THREAD_VARIABLES}
 
 
 def test_a_users_choice_is_kept():
     env = {"OPENBLAS_NUM_THREADS": "4"}
-    single_threaded_blas(env)
+    single_threaded_environment(env)
     assert env["OPENBLAS_NUM_THREADS"] == "4"
     assert env["MKL_NUM_THREADS"] == "1"
 
@@ -40,8 +50,49 @@ def test_numpy_is_imported_after_the_setting():
         "import numpy\n"
         "print(os.environ['OPENBLAS_NUM_THREADS'])\n"
     )
-    env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
+    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
     )
     assert out.stdout.strip().splitlines()[-1] == "1"
+
+
+def _blas_threads():
+    from threadpoolctl import threadpool_info
+
+    return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+
+def test_limit_only_for_large_systems_and_without_a_user_setting():
+    env = {}
+    assert isinstance(one_blas_thread(MIN_UNKNOWNS - 1, env), type(one_blas_thread(10, env)))
+    with one_blas_thread(MIN_UNKNOWNS, env):
+        assert set(_blas_threads()) <= {1}
+    with one_blas_thread(MIN_UNKNOWNS, {"OPENBLAS_NUM_THREADS": "2"}):
+        pass  # nothing set: the user's variable wins (no threadpoolctl call to check)
+
+
+def test_solve_dae_runs_a_large_system_with_one_blas_thread(monkeypatch):
+    # y' = -y for MIN_UNKNOWNS unknowns; the residual records the BLAS thread counts
+    # it sees. Without a thread pool (a 1-core machine) there is nothing to limit.
+    for name in THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    if not _blas_threads() or max(_blas_threads()) < 2:
+        pytest.skip("the BLAS libraries here run one thread anyway")
+    from dnasim.solver import solve_dae
+
+    n = MIN_UNKNOWNS
+    seen = []
+
+    def F(t, y, yp):
+        if not seen:
+            seen.extend(_blas_threads())
+        return yp + y
+
+    pattern = scipy.sparse.identity(n, format="csr")
+    res = solve_dae(
+        F, (0.0, 0.01), np.ones(n), -np.ones(n), jac_sparsity=pattern, calc_initial=False
+    )
+    assert res.success
+    assert seen and set(seen) == {1}
+    assert max(_blas_threads()) >= 2  # restored afterwards

@@ -20,7 +20,10 @@ PACKAGE = Path(__file__).resolve().parent.parent / "dnasim"
 
 #: the stages, earliest first (docs/architecture.md has one line per stage)
 STAGES: list[tuple[str, list[str]]] = [
-    ("foundation", ["dnasim.errors", "dnasim.interrupts", "dnasim.timefunctions"]),
+    (
+        "foundation",
+        ["dnasim.errors", "dnasim.interrupts", "dnasim.timefunctions", "dnasim.blas_threads"],
+    ),
     ("units", ["dnasim.units"]),
     ("values", ["dnasim.values"]),
     ("media", ["dnasim.media"]),

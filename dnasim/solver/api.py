@@ -18,11 +18,13 @@ It validates the input, makes the initial values consistent, and steps with
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from dnasim.blas_threads import one_blas_thread
 from dnasim.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
 from dnasim.solver.bdf import CountedResidual, NordsieckBDF, SolverStats
@@ -35,7 +37,7 @@ from dnasim.solver.result import DAEResult, NordsieckSolution
 MAX_RESTARTS_AT_ONE_TIME = 50
 
 
-def solve_dae(
+def _solve_dae(
     residual: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
     t_span: Sequence[float],
     y0,
@@ -761,3 +763,10 @@ def _vector(v, what, n=None) -> np.ndarray:
 
 
 __all__ = ["solve_dae", "nd"]
+
+
+@functools.wraps(_solve_dae)
+def solve_dae(residual, t_span, y0, yp0=None, **options):
+    # one BLAS thread while a large system is integrated (dnasim.blas_threads)
+    with one_blas_thread(int(np.size(y0))):
+        return _solve_dae(residual, t_span, y0, yp0, **options)
