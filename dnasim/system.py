@@ -90,7 +90,7 @@ import inspect
 import numpy as np
 import scipy.sparse as sp
 
-from dnasim.components.base import LocalVector
+from dnasim.components.base import ROWS_KEY, LocalVector, ScalarRows
 from dnasim.components.physics import upwind_weight
 from dnasim.errors import PlantError, ResidualDomainError
 
@@ -620,15 +620,19 @@ def evaluation_units(blocks) -> list:
         if key is None:
             order.append(b)
             continue
-        group = groups.get((type(b.comp), key))
+        # the components with scalar rows (``ScalarRows``) in one unit, whatever their class
+        group_key = key if key == ROWS_KEY else (type(b.comp), key)
+        group = groups.get(group_key)
         if group is None:
-            group = groups[(type(b.comp), key)] = []
+            group = groups[group_key] = []
             order.append(group)
         group.append(b)
     units = []
     for u in order:
         if type(u) is not list:
             units.append(u)
+        elif u[0].comp.batch_key() == ROWS_KEY:
+            units.append(ScalarRows(u))
         else:
             units.append(type(u[0].comp).batch(u))
     return units

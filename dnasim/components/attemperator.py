@@ -194,6 +194,51 @@ class Attemperator(Component):
         rho_f = upwind_mean(ms, rho[0], rho[1], self.m_eps)
         return x["steam_in.p"] - x["p_v"] - friction_dp(self.params["k"], ms, rho_f, self.m_reg)
 
+    #: the names ``row_values`` reads from y, in its order
+    ROW_READS = (
+        "m_steam",
+        "m_water",
+        "m_out",
+        "M",
+        "U",
+        "p_v",
+        "h_v",
+        "T",
+        "steam_in.p",
+        "steam_in.h",
+        "water_in.p",
+        "water_in.h",
+        "outlet.p",
+        "outlet.h",
+    )
+
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        return self.ROW_READS, ("M", "U")
+
+    def row_values(self, t, v, vp, modes):
+        """The residuals of ``equations()`` in their order, from the values of
+        ``row_reads``: one property call (``_properties``) and the class doc's balances."""
+        m_s, m_w, m_o, M, U, p_v, h_v, T, p_s, h_s, p_w, h_w, p_o, h_o = v
+        T_st, rho, u = self._props(self.medium, np.array([p_s, p_v]), np.array([h_s, h_v]))
+        eps = self.m_eps
+        E_in = (
+            energy_in(m_s, h_s, h_v, eps)
+            + energy_in(m_w, h_w, h_v, eps)
+            + energy_in(-m_o, h_o, h_v, eps)
+        )
+        rho_f = upwind_mean(m_s, rho[0], rho[1], eps)
+        return [
+            vp[0] - (m_s + m_w - m_o),
+            vp[1] - E_in,
+            M - self.params["V"] * rho[1],
+            U - M * u[1],
+            p_s - p_v - friction_dp(self.params["k"], m_s, rho_f, self.m_reg),
+            p_w - p_v,
+            p_o - p_v,
+            T - T_st[1],
+        ]
+
     def guess_nodes(self, t0):
         P = self.params
         if P["p0"] is not None and P["T0"] is not None:

@@ -77,6 +77,8 @@ __all__ = [
     "Output",
     "LocalVector",
     "Component",
+    "ScalarRows",
+    "ROWS_KEY",
 ]
 
 
@@ -421,6 +423,70 @@ class LocalVector:
         return name in self.index
 
 
+#: the ``Component.batch_key`` of components evaluated by ``ScalarRows``, whatever their class
+ROWS_KEY = "ScalarRows"
+
+
+class ScalarRows:
+    """The residual rows of several components with ``row_reads``, evaluated as one
+    unit of the System (``dnasim.system.evaluation_units``): the values each one reads
+    gathered from the plant-wide y and y' through index arrays made once (one gather and
+    one ``tolist`` for all of them), each component's ``row_values`` on its part, and
+    all rows written into F at once. The equations stay declared in the component's
+    ``equations()`` (names, dependencies, units, the residual functions of
+    ``residual``); ``row_values`` restates their residuals on plain floats, equal to
+    ``residual``'s to the bit (tests/test_scalar_rows.py).
+
+    ``blocks``: the System's ``ComponentBlock``s (component, local -> global indices
+    ``gidx``, local names ``index``, rows ``eq_slice``, discrete ``modes``)."""
+
+    def __init__(self, blocks):
+        self.blocks = list(blocks)
+        y_at, yp_at, rows, self.items = [], [], [], []
+        for b in self.blocks:
+            reads_y, reads_yp = b.comp.row_reads()
+            sy = slice(len(y_at), len(y_at) + len(reads_y))
+            syp = slice(len(yp_at), len(yp_at) + len(reads_yp))
+            y_at += [b.gidx[_position(b, name)] for name in reads_y]
+            yp_at += [b.gidx[_position(b, name)] for name in reads_yp]
+            rows += range(b.eq_slice.start, b.eq_slice.stop)
+            self.items.append((b.comp.row_values, sy, syp, b.modes))
+        self.y_at = np.array(y_at, dtype=np.intp)
+        self.yp_at = np.array(yp_at, dtype=np.intp)
+        self.rows = np.array(rows, dtype=np.intp)
+
+    def residual_into(self, t, y, yp, F) -> None:
+        """F[rows of the components] = their residuals at (t, y, y') (global vectors)."""
+        v = y[self.y_at].tolist()
+        vp = yp[self.yp_at].tolist()
+        out = []
+        for values, sy, syp, modes in self.items:
+            out += values(t, v[sy], vp[syp], modes)
+        if len(out) != self.rows.size:
+            self._count_error(t, v, vp)
+        F[self.rows] = out
+
+    def _count_error(self, t, v, vp):
+        for b, (values, sy, syp, modes) in zip(self.blocks, self.items, strict=True):
+            n, declared = len(values(t, v[sy], vp[syp], modes)), b.eq_slice.stop - b.eq_slice.start
+            if n != declared:
+                raise PlantError(
+                    f"component '{b.comp.name}' ({type(b.comp).__name__}): row_values gave {n} "
+                    f"residuals but it declares {declared} equations"
+                )
+
+
+def _position(block, name) -> int:
+    """The local position of ``name`` in a System block (a scalar: not a whole vector)."""
+    k = block.index.get(name)
+    if k is None or isinstance(k, slice):
+        raise PlantError(
+            f"component '{block.comp.name}' ({type(block.comp).__name__}): row_reads names "
+            f"'{name}', which is not one of its scalar variables, port values or signal inputs"
+        )
+    return k
+
+
 def _check_number(comp, param, value):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise PlantError(
@@ -699,6 +765,35 @@ class Component:
         scalar = all(e.size is None for e in eqs)
         total = sum(e.n_rows for e in eqs)
         return eqs, (tuple(e.residual for e in eqs) if scalar else None), total
+
+    # ------------------------------------------------------------ scalar rows
+    def row_reads(self) -> tuple[tuple[str, ...], tuple[str, ...]] | None:
+        """The local names ``row_values`` reads from y and from y', or None (the
+        default): the component has no such fast path and is evaluated by ``residual``.
+
+        A component that gives them is evaluated with the others that do in one
+        ``ScalarRows`` unit of the System (``batch_key``): their values gathered from
+        the plant-wide vectors through index arrays made once, in one loop, no
+        ``LocalVector`` and no name look-up per value."""
+        return None
+
+    def row_values(self, t: float, v: list, vp: list, modes: dict) -> list:
+        """The residuals of ``equations()`` in their order, as ``residual`` gives them to
+        the bit, from v and vp: the values [SI] of the names of ``row_reads()`` (y and
+        y'), and the component's discrete ``modes``. Only with ``row_reads``."""
+        raise NotImplementedError
+
+    def batch_key(self):
+        """Components with equal keys are evaluated together by ``batch(blocks)``
+        (``dnasim.system.evaluation_units``); ``ROWS_KEY`` for a component with
+        ``row_reads`` (all of them in one ``ScalarRows``, whatever their class), else
+        None: alone, by ``residual``."""
+        return ROWS_KEY if self.row_reads() is not None else None
+
+    @staticmethod
+    def batch(blocks):
+        """The ``ScalarRows`` of the System blocks of components with ``row_reads``."""
+        return ScalarRows(blocks)
 
     def prepare(self, t: float, x: LocalVector, xp: LocalVector):
         """Hook: what several equations share, computed once per residual evaluation

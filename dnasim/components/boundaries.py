@@ -350,6 +350,24 @@ class PressureBoundary(_Boundary):
             + self.accumulator_equations()
         )
 
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        supply = ("h_supply",) if self.has_supply else ()
+        return ("port.p", "m", "port.h") + supply, ("M_passed", "H_passed")
+
+    def row_values(self, t, v, vp, modes):
+        """The residuals of ``equations()`` (pressure, supply, mass_passed, energy_passed)
+        from the values of ``row_reads``."""
+        p_port, m, h_port = v[0], v[1], v[2]
+        p = self.param_at("p", t)
+        out = [p_port - p]
+        if self.has_supply:
+            out.append(v[3] - self.supply_h(t, p))
+        h_own = v[3] if self.has_supply else h_port
+        energy = -float(energy_in(-m, h_port, h_own, self.m_eps))  # ``energy_flow``
+        out += [vp[0] - m, vp[1] - energy]
+        return out
+
     def guess_nodes(self, t0):
         p = self.param_at("p", t0)
         if not self.has_supply:

@@ -221,6 +221,30 @@ class PIController(Component):
             ),
         ]
 
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        w = ("set_point",) if self.setpoint_from_signal else ()
+        return ("e", "measured", "m_p", "m_I", "z") + w, ("m_I",)
+
+    def row_values(self, t, v, vp, modes):
+        """The residuals of ``equations()`` (error, proportional, integral, output) from
+        the values of ``row_reads`` and the mode."""
+        P = self.params
+        e, measured, m_p, m_I, z = v[0], v[1], v[2], v[3], v[4]
+        w = v[5] if self.setpoint_from_signal else self.param_at("setpoint", t)
+        mode = modes.get("mode", "free")
+        hold = P["anti_windup"] and mode != "free"
+        if mode == "free":
+            output = z - (m_p + m_I)
+        else:
+            output = z - (P["z_max"] if mode == "high" else P["z_min"])
+        return [
+            e - self.sign * (measured - w),
+            m_p - P["Kp"] * e,
+            vp[0] - (0.0 if hold else P["KI"] * e),
+            output,
+        ]
+
     def _integral(self, t, x, xp):
         P = self.params
         hold = P["anti_windup"] and self._mode(x) != "free"

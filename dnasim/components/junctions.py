@@ -70,6 +70,31 @@ class _Junction(Component):
         ]
         return eqs
 
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``): the flows, the
+        ports' enthalpies, h_mix and the ports' pressures."""
+        ports = self.port_names()
+        return (
+            tuple(self.flow_names())
+            + tuple(f"{p}.h" for p in ports)
+            + ("h_mix",)
+            + tuple(f"{p}.p" for p in ports)
+        ), ()
+
+    def row_values(self, t, v, vp, modes):
+        """The residuals of ``equations()`` (mass, mixing, pressure_k) from the values of
+        ``row_reads``, with the numpy operations of ``prepare`` and ``_mixing``."""
+        n = len(self.port_names())
+        into = self.__dict__.get("_into")
+        if into is None:  # per port: its flow variable counts into the junction
+            into = self._into = [p.role == "inlet" for p in self.fluid_ports()]
+        flows = np.array([m if inward else -m for m, inward in zip(v[:n], into, strict=True)])
+        h = np.array(v[n : 2 * n])
+        h_mix = v[2 * n]
+        p = v[2 * n + 1 :]
+        mixing = np.dot(upwind_weight(flows, self.m_eps), h - h_mix)
+        return [flows.sum(), mixing] + [p_k - p[-1] for p_k in p[:-1]]
+
     def prepare(self, t, x, xp):
         """The flows into the junction (``flows_in``), once per evaluation (``x.work``)."""
         return self.flows_in(x)

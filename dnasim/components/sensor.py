@@ -178,6 +178,18 @@ class TemperatureSensor(_NodeSensor):
         # single point, without the arrays)
         return self.medium.state(x["port.p"], x["port.h"]).T
 
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        return ("T_s", "port.p", "port.h"), ("T_s",)
+
+    def row_values(self, t, v, vp, modes):
+        """The lag residual of ``equations()`` from the values of ``row_reads`` [K]."""
+        q = self.medium.state(v[1], v[2]).T
+        tau = self.T_lag
+        if tau > 0:
+            return [tau * vp[0] - (q - v[0])]
+        return [v[0] - q]
+
     def initial_guess(self, t0, x):
         T0 = self.params["T0"]
         x["T_s"] = T0 if T0 is not None else self._q(t0, x)

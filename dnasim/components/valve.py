@@ -104,6 +104,17 @@ class Valve(Component):
         dp = x["inlet.p"] - x["outlet.p"]
         return x["m"] - valve_flow(self.params["C"], self.opening(t, x), dp, self.params["dp_reg"])
 
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        return ("m", "inlet.p", "outlet.p") + (("z",) if self.opening_from_signal else ()), ()
+
+    def row_values(self, t, v, vp, modes):
+        """The flow residual of ``_flow`` from the values of ``row_reads`` [kg/s]."""
+        z = v[3] if self.opening_from_signal else self.param_at("opening", t)
+        leak = self.params["leakage"]
+        z_e = leak + (1.0 - leak) * z
+        return [v[0] - valve_flow(self.params["C"], z_e, v[1] - v[2], self.params["dp_reg"])]
+
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
         z = self.opening(t0, x) if not self.opening_from_signal else 0.5
