@@ -49,6 +49,7 @@ def test_scalar_rows_equal_the_components_residuals_to_the_bit(name):
         kinds = {type(b.comp).__name__ for u in batched for b in u.blocks}
         assert {"PressureBoundary", "Valve", "TemperatureSensor"} <= kinds
         assert "Attemperator" in kinds
+        assert ("PIDController" if name == "attemperator" else "PIController") in kinds
     try:
         y0, yp0 = initial_values(system, 0.0, "steady")
     except Exception:  # a plant without a steady state: its guess
@@ -103,3 +104,36 @@ def test_scalar_rows_of_a_split_and_remixed_stream():
         np.testing.assert_array_equal(system.residual(1.0, y, yp), expected)
         compared += 1
     assert compared >= 2  # the steady state and a point moved by 1e-6
+
+
+@pytest.mark.parametrize(
+    "pid",
+    [
+        dict(Kp=0.8, T_i=5.0, z_min=0.0, z_max=1.0),  # PI with back-calculation
+        dict(Kp=0.8, T_i=5.0, anti_windup=False),  # plain PI
+        dict(Kp=0.8),  # P only: m_I a bias
+        dict(Kp=0.8, T_i=5.0, active="manual_then_auto", z_manual=0.3),  # bumpless transfer
+    ],
+)
+def test_pid_rows_in_every_mode(pid):
+    # the PIDController's rows without a D part, in automatic and manual, free and
+    # saturated high and low: the rows of its own residual, to the bit
+    from test_pid import loop
+
+    from dnasim.timefunctions import Step
+
+    if pid.get("active") == "manual_then_auto":
+        pid = dict(pid, active=Step(100.0, 0.0, 1.0))
+    system = loop(1.0, **pid).compile()
+    assert any(
+        isinstance(u, ScalarRows) and any(b.comp.name == "pid" for b in u.blocks)
+        for u in system.residual_units
+    )
+    y0, yp0 = initial_values(system, 0.0, "steady")
+    modes = system.modes["pid"]
+    for mode in ("free", "high", "low"):
+        modes["mode"] = mode
+        for y, yp in points(system, y0, yp0):
+            for t in (0.0, 150.0):  # manual before 100 s with active given
+                expected = by_component(system, t, y, yp)
+                np.testing.assert_array_equal(system.residual(t, y, yp), expected)

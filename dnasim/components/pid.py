@@ -319,6 +319,43 @@ class PIDController(Component):
         ]
         return eqs
 
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``); None with a D part
+        or tracking (then ``residual`` evaluates the controller)."""
+        if self.has_d or self.params["tracking"]:
+            return None
+        w = ("set_point",) if self.setpoint_from_signal else ()
+        return ("e", "measured", "m_p", "m_I", "v", "z") + w, ("m_I",)
+
+    def row_values(self, t, v, vp, modes):
+        """The residuals of ``equations()`` (error, proportional, integral, demand,
+        output) of a PI(D) without D part and tracking, from the values of ``row_reads``
+        and the mode: ``_integral`` and ``_output`` on plain floats."""
+        P = self.params
+        e, measured, m_p, m_I, dem, z = v[0], v[1], v[2], v[3], v[4], v[5]
+        w = v[6] if self.setpoint_from_signal else self.param_at("setpoint", t)
+        if not self._automatic(t):
+            z_track = self.param_at("z_manual", t)
+            integral = vp[0] - (z_track - dem) / self.T_t
+            output = z - z_track
+        else:
+            rate = self.Kp / P["T_i"] * e if P["T_i"] is not None else 0.0
+            if P["anti_windup"] and P["T_i"] is not None:
+                rate += (z - dem) / self.T_t
+            integral = vp[0] - rate
+            mode = modes.get("mode", "free")
+            if mode == "free":
+                output = z - dem
+            else:
+                output = z - (P["z_max"] if mode == "high" else P["z_min"])
+        return [
+            e - self.sign * (measured - w),
+            m_p - self.Kp * e,
+            integral,
+            dem - m_p - m_I - 0.0,
+            output,
+        ]
+
     def _e_d(self, t, x):
         return self.sign * (x["measured"] - self.params["c_d"] * self.set_point_value(t, x))
 
