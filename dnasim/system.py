@@ -57,9 +57,16 @@ Evaluation: ``residual`` runs over ``residual_units`` (``evaluation_units``): ea
 component alone (``Component.residual`` on its ``LocalVector``), or the components of
 a class that offers batches (``batch_key()``, ``batch(blocks)``: the library's
 ``Pipe``) with one key together, as one vectorised block over the plant-wide vectors
-(``dnasim.components.pipe.PipeBatch``), which gives every row the same number to the
-bit. The finite-difference Jacobian's partial evaluations (``residual_for_columns``)
-batch the components a column group touches the same way.
+(``dnasim.components.pipe.PipeBatch``), and the components with scalar rows
+(``Component.row_reads``: boundaries, valves, sensors, controllers, attemperators,
+junctions) in one ``dnasim.components.base.ScalarRows``: their values gathered through
+index arrays made once, no name look-up per value. Each gives every row the same
+number as the component's own ``residual``, to the bit. The finite-difference
+Jacobian's partial evaluations (``residual_for_columns``) batch the components a
+column group touches the same way (the units of each set of blocks made once).
+
+Output rows (``output_row``): y, the node temperatures, and the components' derived
+outputs, alike pipes together (``PipeBatch.output_values``).
 
 Sparsity: from the components' ``Equation`` declarations (``y`` and ``yp``
 lists) and the node equations; ``pattern_y`` (dF/dy), ``pattern_yp`` (dF/dy')
