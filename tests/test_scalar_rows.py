@@ -137,3 +137,40 @@ def test_pid_rows_in_every_mode(pid):
             for t in (0.0, 150.0):  # manual before 100 s with active given
                 expected = by_component(system, t, y, yp)
                 np.testing.assert_array_equal(system.residual(t, y, yp), expected)
+
+
+def test_a_subclass_elsewhere_is_evaluated_by_its_own_residual():
+    # a plugin's subclass of Valve that changes the flow law must not be evaluated by
+    # Valve.row_values (which restates Valve's law): it stays a ComponentBlock
+    from dnasim.components import PressureBoundary, Valve
+    from dnasim.plant import Plant
+    from dnasim.system import ComponentBlock
+
+    class LinearValve(Valve):
+        REGISTER = False
+
+        def _flow(self, t, x, xp):
+            return x["m"] - self.params["C"] * (x["inlet.p"] - x["outlet.p"])
+
+    plant = Plant("linear", medium="Air")
+    plant.add(PressureBoundary("src", p=2e5, T=300.0))
+    plant.add(LinearValve("valve", C=1e-5, opening=1.0))
+    plant.add(PressureBoundary("sink", p=1e5))
+    for a, n in [
+        ("src.port", "a"),
+        ("valve.inlet", "a"),
+        ("valve.outlet", "b"),
+        ("sink.port", "b"),
+    ]:
+        plant.connect(a, n)
+    system = plant.compile()
+    units = {
+        b.comp.name: type(u)
+        for u in system.residual_units
+        for b in (u.blocks if isinstance(u, ScalarRows) else [u])
+    }
+    assert units == {"src": ScalarRows, "valve": ComponentBlock, "sink": ScalarRows}
+    y, yp = initial_values(system, 0.0, "steady")
+    # its own law holds at the steady state: m = C dp = 1e-5 * 1e5 = 1 kg/s (to the
+    # start's Newton tolerance, 1e-9 relative)
+    assert abs(y[system.index["valve.m"]] - 1.0) < 1e-9

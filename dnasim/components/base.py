@@ -787,8 +787,13 @@ class Component:
         """Components with equal keys are evaluated together by ``batch(blocks)``
         (``dnasim.system.evaluation_units``); ``ROWS_KEY`` for a component with
         ``row_reads`` (all of them in one ``ScalarRows``, whatever their class), else
-        None: alone, by ``residual``."""
-        return ROWS_KEY if self.row_reads() is not None else None
+        None: alone, by ``residual``. A subclass from another module than the class
+        that wrote ``row_values`` is evaluated alone too: it may change the equations
+        (or the helpers they call) that ``row_values`` restates."""
+        if self.row_reads() is None:
+            return None
+        owner = next(c for c in type(self).__mro__ if "row_values" in c.__dict__)
+        return ROWS_KEY if type(self).__module__ == owner.__module__ else None
 
     @staticmethod
     def batch(blocks):
