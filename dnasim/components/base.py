@@ -308,6 +308,8 @@ class Equation:
     residual: ``f(t, x, xp) -> float``. When every equation of a component has one,
     ``Component.residual`` is derived from the list (in its order), so the docs
     (``dnasim components``), the sparsity and the residual come from one place.
+    A component with ``row_reads`` gives none: its equations' residuals are written
+    once, together, in ``Component.row_values``.
 
     A vector equation (``size=n``, e.g. the mass balance of each of a pipe's n
     volumes) stands for n scalar rows named "name[0]" ... "name[n-1]". Then ``y``
@@ -432,10 +434,13 @@ class ScalarRows:
     unit of the System (``dnasim.system.evaluation_units``): the values each one reads
     gathered from the plant-wide y and y' through index arrays made once (one gather and
     one ``tolist`` for all of them), each component's ``row_values`` on its part, and
-    all rows written into F at once. The equations stay declared in the component's
-    ``equations()`` (names, dependencies, units, the residual functions of
-    ``residual``); ``row_values`` restates their residuals on plain floats, equal to
-    ``residual``'s to the bit (tests/test_scalar_rows.py).
+    all rows written into F at once. Each such component writes its equations once,
+    in ``row_values`` (on plain floats); its ``equations()`` declare their names,
+    dependencies, units and docs without residual functions, and its
+    ``Component.residual`` (the path of tests and of callers outside the System's
+    evaluation) looks the names of ``row_reads`` up in x, xp and calls the same
+    ``row_values``, so both paths give the same rows to the bit
+    (tests/test_scalar_rows.py).
 
     ``blocks``: the System's ``ComponentBlock``s (component, local -> global indices
     ``gidx``, local names ``index``, rows ``eq_slice``, discrete ``modes``)."""
@@ -727,13 +732,23 @@ class Component:
         return state
 
     def residual(self, t: float, x: LocalVector, xp: LocalVector) -> np.ndarray:
-        """F of the component's equations: by default each declared
-        ``Equation.residual`` in the order of ``equations()`` (a component whose
-        equations carry no functions overrides this method)."""
+        """F of the component's equations, in the order of ``equations()``.
+
+        A component with ``row_reads`` (its equations written once, in ``row_values``):
+        the values of the names of ``row_reads()`` looked up in x and xp, then
+        ``row_values``; the System evaluates it without this look-up, in a
+        ``ScalarRows``, from the same function. Otherwise each declared
+        ``Equation.residual`` (a component whose equations carry no functions
+        overrides this method)."""
         declared = self.__dict__.get("_declared")
         if declared is None:
             declared = self._declared = self._declare_residuals()
-        eqs, functions, total = declared
+        reads, eqs, functions, total = declared
+        if reads is not None:
+            return np.array(
+                self.row_values(t, [x[n] for n in reads[0]], [xp[n] for n in reads[1]], x.modes),
+                dtype=float,
+            )
         x.work = self.prepare(t, x, xp)
         if functions is not None:  # scalar equations only: one value each
             return np.array([f(t, x, xp) for f in functions], dtype=float)
@@ -752,10 +767,14 @@ class Component:
         return out
 
     def _declare_residuals(self):
-        """(equations, their residual functions when every one is scalar, else None,
-        the number of rows), made once per component (``residual``'s per-call work is
-        the calls alone)."""
+        """(``row_reads()``, equations, their residual functions when every one is
+        scalar, else None, the number of rows), made once per component
+        (``residual``'s per-call work is the calls alone)."""
+        reads = self.rows_checked()
         eqs = self.equations()
+        total = sum(e.n_rows for e in eqs)
+        if reads is not None:
+            return reads, eqs, None, total
         missing = [e.name for e in eqs if e.residual is None]
         if missing:
             raise NotImplementedError(
@@ -763,37 +782,52 @@ class Component:
                 f"{', '.join(missing)} declare no residual function"
             )
         scalar = all(e.size is None for e in eqs)
-        total = sum(e.n_rows for e in eqs)
-        return eqs, (tuple(e.residual for e in eqs) if scalar else None), total
+        return None, eqs, (tuple(e.residual for e in eqs) if scalar else None), total
 
     # ------------------------------------------------------------ scalar rows
     def row_reads(self) -> tuple[tuple[str, ...], tuple[str, ...]] | None:
         """The local names ``row_values`` reads from y and from y', or None (the
-        default): the component has no such fast path and is evaluated by ``residual``.
+        default): the component's equations carry their residual functions
+        (``Equation.residual``) and it is evaluated alone by ``residual``.
 
-        A component that gives them is evaluated with the others that do in one
-        ``ScalarRows`` unit of the System (``batch_key``): their values gathered from
-        the plant-wide vectors through index arrays made once, in one loop, no
-        ``LocalVector`` and no name look-up per value."""
+        A component that gives them writes its equations once, in ``row_values``
+        (its ``Equation`` declarations keep the names, dependencies, units and docs,
+        without residual functions). The System evaluates it with the others that
+        do in one ``ScalarRows`` unit (``batch_key``): their values gathered from the
+        plant-wide vectors through index arrays made once, no ``LocalVector`` and no
+        name look-up per value; ``residual`` looks the same names up in x, xp and
+        calls the same ``row_values``."""
         return None
 
     def row_values(self, t: float, v: list, vp: list, modes: dict) -> list:
-        """The residuals of ``equations()`` in their order, as ``residual`` gives them to
-        the bit, from v and vp: the values [SI] of the names of ``row_reads()`` (y and
-        y'), and the component's discrete ``modes``. Only with ``row_reads``."""
+        """The residuals of ``equations()`` in their order, from v and vp: the values
+        [SI] of the names of ``row_reads()`` (y and y'), and the component's discrete
+        ``modes``. Only with ``row_reads``."""
         raise NotImplementedError
+
+    def rows_checked(self):
+        """``row_reads()``, after checking that the equations are written once: a
+        component with ``row_reads`` (e.g. a subclass of one) whose ``equations()``
+        carry residual functions would have two definitions; PlantError."""
+        reads = self.row_reads()
+        if reads is not None:
+            twice = [e.name for e in self.equations() if e.residual is not None]
+            if twice:
+                raise PlantError(
+                    f"component '{self.name}' ({type(self).__name__}): equation(s) "
+                    f"{', '.join(twice)} carry residual functions, but the class writes its "
+                    "equations in row_values (it has row_reads); write them in one place: "
+                    "override row_values, or return None from row_reads"
+                )
+        return reads
 
     def batch_key(self):
         """Components with equal keys are evaluated together by ``batch(blocks)``
         (``dnasim.system.evaluation_units``); ``ROWS_KEY`` for a component with
-        ``row_reads`` (all of them in one ``ScalarRows``, whatever their class), else
-        None: alone, by ``residual``. A subclass from another module than the class
-        that wrote ``row_values`` is evaluated alone too: it may change the equations
-        (or the helpers they call) that ``row_values`` restates."""
-        if self.row_reads() is None:
-            return None
-        owner = next(c for c in type(self).__mro__ if "row_values" in c.__dict__)
-        return ROWS_KEY if type(self).__module__ == owner.__module__ else None
+        ``row_reads`` (all of them in one ``ScalarRows``, whatever their class: a
+        subclass that overrides ``row_values`` is evaluated by its own, on both
+        paths), else None: alone, by ``residual``."""
+        return None if self.rows_checked() is None else ROWS_KEY
 
     @staticmethod
     def batch(blocks):

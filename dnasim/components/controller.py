@@ -190,34 +190,24 @@ class PIController(Component):
         ]
 
     def equations(self):
-        P = self.params
+        """The equations of the class doc (their residuals: ``row_values``)."""
         return [
             Equation(
                 "error",
                 y=("e", "measured", *(("set_point",) if self.setpoint_from_signal else ())),
                 doc="e = sign (measured - w)   (10.13a)",
-                residual=lambda t, x, xp: (
-                    x["e"] - self.sign * (x["measured"] - self.set_point_value(t, x))
-                ),
             ),
-            Equation(
-                "proportional",
-                y=("m_p", "e"),
-                doc="m_p = Kp e",
-                residual=lambda t, x, xp: x["m_p"] - P["Kp"] * x["e"],
-            ),
+            Equation("proportional", y=("m_p", "e"), doc="m_p = Kp e"),
             Equation(
                 "integral",
                 y=("e",),
                 yp=("m_I",),
                 doc="dm_I/dt = KI e (0 while saturated with anti-windup)   (10.13c)",
-                residual=self._integral,
             ),
             Equation(
                 "output",
                 y=("z", "m_p", "m_I"),
                 doc="z = m_p + m_I (free), z_max (high), z_min (low)   (10.13b)",
-                residual=self._output,
             ),
         ]
 
@@ -227,11 +217,17 @@ class PIController(Component):
         return ("e", "measured", "m_p", "m_I", "z") + w, ("m_I",)
 
     def row_values(self, t, v, vp, modes):
-        """The residuals of ``equations()`` (error, proportional, integral, output) from
-        the values of ``row_reads`` and the mode."""
+        """The equations of the class doc, their residuals [output unit, its rate for
+        the integral], in the discrete mode ``modes["mode"]``:
+
+          error         e - s (measured - w)
+          proportional  m_p - Kp e
+          integral      dm_I/dt - KI e      (dm_I/dt while saturated, if anti_windup)
+          output        z - (m_p + m_I)     (free),  z - z_max (high),  z - z_min (low)
+        """
         P = self.params
-        e, measured, m_p, m_I, z = v[0], v[1], v[2], v[3], v[4]
-        w = v[5] if self.setpoint_from_signal else self.param_at("setpoint", t)
+        e, measured, m_p, m_I, z, *w = v
+        w = w[0] if self.setpoint_from_signal else self.param_at("setpoint", t)
         mode = modes.get("mode", "free")
         hold = P["anti_windup"] and mode != "free"
         if mode == "free":
@@ -244,17 +240,6 @@ class PIController(Component):
             vp[0] - (0.0 if hold else P["KI"] * e),
             output,
         ]
-
-    def _integral(self, t, x, xp):
-        P = self.params
-        hold = P["anti_windup"] and self._mode(x) != "free"
-        return xp["m_I"] - (0.0 if hold else P["KI"] * x["e"])
-
-    def _output(self, t, x, xp):
-        mode = self._mode(x)
-        if mode == "free":
-            return x["z"] - (x["m_p"] + x["m_I"])
-        return x["z"] - (self.params["z_max"] if mode == "high" else self.params["z_min"])
 
     # ----------------------------------------------------------------- switches
     def _gain_sign(self):
