@@ -60,8 +60,10 @@ a class that offers batches (``batch_key()``, ``batch(blocks)``: the library's
 (``dnasim.components.pipe.PipeBatch``), and the components with scalar rows
 (``Component.row_reads``: boundaries, valves, sensors, controllers, attemperators,
 junctions) in one ``dnasim.components.base.ScalarRows``: their values gathered through
-index arrays made once, no name look-up per value. Each gives every row the same
-number as the component's own ``residual``, to the bit. The finite-difference
+index arrays made once, no name look-up per value, and each component's
+``row_values``, where its equations are written (once: its ``Component.residual`` is
+derived from the same function). Each unit gives every row the same number as the
+component's own ``residual``, to the bit. The finite-difference
 Jacobian's partial evaluations (``residual_for_columns``) batch the components a
 column group touches the same way (the units of each set of blocks made once).
 

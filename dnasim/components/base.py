@@ -16,10 +16,17 @@ A component declares, in plain Python:
   A vector equation (``Equation(..., size=n)``) declares n rows "name[0]" ...
   "name[n-1]" at once, each with its own dependencies (``y=lambda i: ...``), and
   one residual function returning the n values (a pipe's n mass balances);
-* ``residual(t, x, xp)``: the residuals, in the order of ``equations()`` (derived
-  from the equations' own residual functions unless overridden; ``prepare(t, x,
-  xp)`` computes once what several equations share, e.g. one property call for
-  all volumes, and hands it to them as ``x.work``);
+* the residuals, in the order of ``equations()``, written once, in one of two ways:
+  each ``Equation`` carries its residual function (``residual=f(t, x, xp)``;
+  ``prepare(t, x, xp)`` computes once what several equations share, e.g. one
+  property call for all volumes, and hands it to them as ``x.work``), or the
+  component gives ``row_reads()`` (the local names it reads from y and y') and
+  ``row_values(t, v, vp, modes)``, all its residuals on plain floats from those
+  values, and its ``Equation`` declarations carry no functions (the boundaries,
+  valves, sensors, controllers, attemperators and junctions: the System evaluates
+  them together in one ``ScalarRows`` over plant-wide index arrays). In both ways
+  ``residual(t, x, xp)`` is derived (a component may also override it, as the pipe
+  does);
 * switch functions (``Switch``) with their actions, for discrete state;
 * ``initial_guess``: values for its variables before initialisation.
 
@@ -808,7 +815,10 @@ class Component:
     def rows_checked(self):
         """``row_reads()``, after checking that the equations are written once: a
         component with ``row_reads`` (e.g. a subclass of one) whose ``equations()``
-        carry residual functions would have two definitions; PlantError."""
+        carry residual functions would have two definitions; PlantError. Checked once
+        per component (the System asks for each set of blocks it evaluates)."""
+        if "_checked_reads" in self.__dict__:
+            return self._checked_reads
         reads = self.row_reads()
         if reads is not None:
             twice = [e.name for e in self.equations() if e.residual is not None]
@@ -819,6 +829,7 @@ class Component:
                     "equations in row_values (it has row_reads); write them in one place: "
                     "override row_values, or return None from row_reads"
                 )
+        self._checked_reads = reads
         return reads
 
     def batch_key(self):
