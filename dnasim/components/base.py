@@ -454,6 +454,8 @@ class ScalarRows:
 
     def __init__(self, blocks):
         self.blocks = list(blocks)
+        #: the components' names, in the order of their rows (as ``PipeBatch.names``)
+        self.names = [b.comp.name for b in self.blocks]
         y_at, yp_at, rows, self.items = [], [], [], []
         for b in self.blocks:
             reads_y, reads_yp = b.comp.row_reads()
