@@ -318,6 +318,8 @@ def test_an_equation_written_twice_is_refused():
 
     class OwnValve(TwiceValve):
         # the same equations, without the row path: evaluated alone, by its functions
+        REGISTER = False
+
         def row_reads(self):
             return None
 

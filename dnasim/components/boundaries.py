@@ -222,12 +222,13 @@ class _Boundary(Component):
         raise NotImplementedError
 
     def own_reads(self) -> tuple[str, ...]:
-        """The names the first equation (``first_row``) reads besides m and port.p."""
+        """The names the first equation (``first_row``) reads besides m and port.p (the
+        last of ``row_reads``)."""
         return ()
 
-    def first_row(self, t, m, p_node, own) -> float:
+    def first_row(self, t, m, p_node, v) -> float:
         """The residual of the class's first equation (pressure or flow) from m [kg/s],
-        the node pressure [Pa] and the values of ``own_reads``."""
+        the node pressure [Pa] and v, the values of ``row_reads`` (``own_reads`` last)."""
         raise NotImplementedError
 
     def row_reads(self):
@@ -244,11 +245,11 @@ class _Boundary(Component):
         mass_passed    dM_passed/dt - m                                 [kg/s]
         energy_passed  dH_passed/dt - E,  E = w(m) h_supply - w(-m) h_node   [W]
         """
-        m, p_node, h_node, *rest = v
-        out = [self.first_row(t, m, p_node, rest[1:] if self.has_supply else rest)]
+        m, p_node, h_node = v[0], v[1], v[2]
+        out = [self.first_row(t, m, p_node, v)]
         if self.has_supply:
-            out.append(rest[0] - self.supply_h(t, self.supply_p(t, p_node)))
-        h_own = rest[0] if self.has_supply else h_node
+            out.append(v[3] - self.supply_h(t, self.supply_p(t, p_node)))
+        h_own = v[3] if self.has_supply else h_node
         # energy_in gives the flow into the boundary (flow -m into it); the plant
         # receives minus that
         energy = -float(energy_in(-m, h_node, h_own, self.m_eps))
@@ -364,7 +365,7 @@ class PressureBoundary(_Boundary):
     def supply_p(self, t, p_node):
         return self.param_at("p", t)
 
-    def first_row(self, t, m, p_node, own):
+    def first_row(self, t, m, p_node, v):
         """pressure: p_node - p(t) [Pa]."""
         return p_node - self.param_at("p", t)
 
@@ -458,9 +459,9 @@ class MassFlowBoundary(_Boundary):
     def own_reads(self):
         return ("m_in",) if self.params["m"] is None else ()
 
-    def first_row(self, t, m, p_node, own):
-        """flow: m - m(t) [kg/s] (``flow_set``)."""
-        return m - self.flow_set(t, *own)
+    def first_row(self, t, m, p_node, v):
+        """flow: m - m(t) [kg/s] (``flow_set``; m_in the last value of v)."""
+        return m - self.flow_set(t, v[-1] if self.params["m"] is None else None)
 
     def equations(self):
         """The equations of the class doc (their residuals: ``row_values``)."""

@@ -315,27 +315,26 @@ class PIDController(Component):
           demand        v - m_p - m_I - m_D                    (m_D = 0 without a D part)
           output        z - v (free), z - z_max (high), z - z_min (low), z - z_track (manual)
         """
-        P, Kp = self.params, self.Kp
-        e, measured, m_p, m_I, *rest = v
-        x_f = m_D = 0.0
-        if self.has_d:
-            x_f, m_D, *rest = rest
-        dem, z, *rest = rest
-        track = rest.pop(0) if P["tracking"] else None
-        w = rest[0] if self.setpoint_from_signal else self.param_at("setpoint", t)
+        P, Kp, has_d, tracking = self.params, self.Kp, self.has_d, self.params["tracking"]
+        e, measured, m_p, m_I = v[0], v[1], v[2], v[3]
+        k = 6 if has_d else 4  # the position of v (the demand) in ``row_reads``
+        x_f, m_D = (v[4], v[5]) if has_d else (0.0, 0.0)
+        dem, z = v[k], v[k + 1]
+        track = v[k + 2] if tracking else None
+        w = v[-1] if self.setpoint_from_signal else self.param_at("setpoint", t)
         out = [e - self.sign * (measured - w), m_p - Kp * e]
-        if self.has_d:
+        if has_d:
             N = P["N"]
             e_d = self._e_d(measured, w)
             out += [P["T_d"] / N * vp[1] - (e_d - x_f), m_D - Kp * N * (e_d - x_f)]
         if not self._automatic(t):
-            z_track = track if P["tracking"] else self.param_at("z_manual", t)
+            z_track = track if tracking else self.param_at("z_manual", t)
             integral = vp[0] - (z_track - dem) / self.T_t
             output = z - z_track
         else:
             rate = Kp / P["T_i"] * e if P["T_i"] is not None else 0.0
             if P["anti_windup"] and P["T_i"] is not None:
-                rate += ((track if P["tracking"] else z) - dem) / self.T_t
+                rate += ((track if tracking else z) - dem) / self.T_t
             integral = vp[0] - rate
             mode = modes.get("mode", "free")
             if mode == "free":

@@ -83,23 +83,24 @@ class _Sensor(Component):
         return [Equation("lag", y=(y, *self.READS), unit=self.Y[1], doc=f"{y} = q (T_lag = 0)")]
 
     def row_reads(self):
-        """The names ``row_values`` reads (``Component.row_reads``): y, then ``READS``."""
+        """The names ``row_values`` reads (``Component.row_reads``): ``READS``, then y."""
         y = self.Y[0]
-        return (y, *self.READS), (y,)
+        return (*self.READS, y), (y,)
 
     def row_values(self, t, v, vp, modes):
         """The lag of the module doc, its residual [unit of q, times s/s]:
         lag  T_lag dy/dt - (q - y)   (T_lag > 0),   y - q   (T_lag = 0),
-        q = ``_q`` of the values of ``READS``."""
-        y, *reads = v
-        q = self._q(t, reads)
+        q = ``_q`` of the values of ``READS`` (the first of v)."""
+        y = v[-1]
+        q = self._q(t, v)
         tau = self.T_lag
         if tau > 0:
             return [tau * vp[0] - (q - y)]
         return [y - q]
 
     def _q(self, t, values) -> float:  # pragma: no cover - abstract
-        """The quantity measured, q [unit of y], from the values of ``READS`` (in order)."""
+        """The quantity measured, q [unit of y], from the values of ``READS``, the
+        first of ``values`` (in order; more may follow)."""
         raise NotImplementedError
 
     def initial_guess(self, t0, x):
@@ -128,7 +129,7 @@ class PressureSensor(_NodeSensor):
     Y = ("p_s", "Pa", 1e5, "measured pressure")
 
     def _q(self, t, values):
-        p, _ = values
+        p = values[0]
         return p
 
 
@@ -146,7 +147,7 @@ class EnthalpySensor(_NodeSensor):
     Y = ("h_s", "J/kg", 1e5, "measured specific enthalpy")
 
     def _q(self, t, values):
-        _, h = values
+        h = values[1]
         return h
 
 
@@ -186,7 +187,7 @@ class TemperatureSensor(_NodeSensor):
     def _q(self, t, values):
         # one point: the medium's cached state (what ``physics.properties`` does for a
         # single point, without the arrays)
-        p, h = values
+        p, h = values[0], values[1]
         return self.medium.state(p, h).T
 
     def initial_guess(self, t0, x):
@@ -214,7 +215,7 @@ class QualitySensor(_NodeSensor):
     Y = ("x_s", "1", 1.0, "measured thermodynamic quality")
 
     def _q(self, t, values):
-        p, h = values
+        p, h = values[0], values[1]
         hl, hv = self.medium.saturation_enthalpies([p])
         hl, hv = float(hl[0]), float(hv[0])
         return (h - hl) / (hv - hl)
@@ -226,7 +227,7 @@ class _SignalSensor(_Sensor):
     READS = ("u",)
 
     def _q(self, t, values):
-        (u,) = values
+        u = values[0]
         return u
 
 

@@ -112,8 +112,8 @@ class Valve(Component):
     def row_values(self, t, v, vp, modes):
         """The equation of the class doc, its residual [kg/s]:
         flow  m - C z_e (p_in - p_out) / ((p_in - p_out)^2 + dp_reg^2)^(1/4)."""
-        m, p_in, p_out, *z = v
-        z_e = self.effective_opening(t, z[0] if z else None)
+        m, p_in, p_out = v[0], v[1], v[2]
+        z_e = self.effective_opening(t, v[3] if self.opening_from_signal else None)
         return [m - valve_flow(self.params["C"], z_e, p_in - p_out, self.params["dp_reg"])]
 
     def initial_guess(self, t0, x):
