@@ -57,9 +57,18 @@ Evaluation: ``residual`` runs over ``residual_units`` (``evaluation_units``): ea
 component alone (``Component.residual`` on its ``LocalVector``), or the components of
 a class that offers batches (``batch_key()``, ``batch(blocks)``: the library's
 ``Pipe``) with one key together, as one vectorised block over the plant-wide vectors
-(``dnasim.components.pipe.PipeBatch``), which gives every row the same number to the
-bit. The finite-difference Jacobian's partial evaluations (``residual_for_columns``)
-batch the components a column group touches the same way.
+(``dnasim.components.pipe.PipeBatch``), and the components with scalar rows
+(``Component.row_reads``: boundaries, valves, sensors, controllers, attemperators,
+junctions) in one ``dnasim.components.base.ScalarRows``: their values gathered through
+index arrays made once, no name look-up per value, and each component's
+``row_values``, where its equations are written (once: its ``Component.residual`` is
+derived from the same function). Each unit gives every row the same number as the
+component's own ``residual``, to the bit. The finite-difference
+Jacobian's partial evaluations (``residual_for_columns``) batch the components a
+column group touches the same way (the units of each set of blocks made once).
+
+Output rows (``output_row``): y, the node temperatures, and the components' derived
+outputs, alike pipes together (``PipeBatch.output_values``).
 
 Sparsity: from the components' ``Equation`` declarations (``y`` and ``yp``
 lists) and the node equations; ``pattern_y`` (dF/dy), ``pattern_yp`` (dF/dy')
@@ -90,7 +99,7 @@ import inspect
 import numpy as np
 import scipy.sparse as sp
 
-from dnasim.components.base import LocalVector
+from dnasim.components.base import ROWS_KEY, LocalVector, ScalarRows
 from dnasim.components.physics import upwind_weight
 from dnasim.errors import PlantError, ResidualDomainError
 
@@ -620,15 +629,19 @@ def evaluation_units(blocks) -> list:
         if key is None:
             order.append(b)
             continue
-        group = groups.get((type(b.comp), key))
+        # the components with scalar rows (``ScalarRows``) in one unit, whatever their class
+        group_key = key if key == ROWS_KEY else (type(b.comp), key)
+        group = groups.get(group_key)
         if group is None:
-            group = groups[(type(b.comp), key)] = []
+            group = groups[group_key] = []
             order.append(group)
         group.append(b)
     units = []
     for u in order:
         if type(u) is not list:
             units.append(u)
+        elif u[0].comp.batch_key() == ROWS_KEY:
+            units.append(ScalarRows(u))
         else:
             units.append(type(u[0].comp).batch(u))
     return units

@@ -99,17 +99,11 @@ class Attemperator(Component):
         ]
 
     def equations(self):
-        """The equations of the class doc, each with its dependencies and residual."""
+        """The equations of the class doc (their residuals: ``row_values``)."""
         flows = ("m_steam", "m_water", "m_out")
-        V = self.params["V"]
         return [
             Equation(
-                "mass",
-                y=flows,
-                yp=("M",),
-                unit="kg/s",
-                doc="dM/dt = m_steam + m_water - m_out",
-                residual=lambda t, x, xp: xp["M"] - (x["m_steam"] + x["m_water"] - x["m_out"]),
+                "mass", y=flows, yp=("M",), unit="kg/s", doc="dM/dt = m_steam + m_water - m_out"
             ),
             Equation(
                 "energy",
@@ -117,82 +111,69 @@ class Attemperator(Component):
                 yp=("U",),
                 unit="W",
                 doc="dU/dt = E_in(m_steam) + E_in(m_water) + E_in(-m_out)",
-                residual=lambda t, x, xp: xp["U"] - self._energy_in(x),
             ),
+            Equation("density", y=("M", "p_v", "h_v"), unit="kg", doc="M = V rho(p_v, h_v)"),
             Equation(
-                "density",
-                y=("M", "p_v", "h_v"),
-                unit="kg",
-                doc="M = V rho(p_v, h_v)",
-                residual=lambda t, x, xp: x["M"] - V * self._states(x)[1][1],
-            ),
-            Equation(
-                "internal_energy",
-                y=("U", "M", "p_v", "h_v"),
-                unit="J",
-                doc="U = M u(p_v, h_v)",
-                residual=lambda t, x, xp: x["U"] - x["M"] * self._states(x)[2][1],
+                "internal_energy", y=("U", "M", "p_v", "h_v"), unit="J", doc="U = M u(p_v, h_v)"
             ),
             Equation(
                 "steam_friction",
                 y=("steam_in.p", "steam_in.h", "p_v", "h_v", "m_steam"),
                 unit="Pa",
                 doc="p_steam - p_v = k m_steam sqrt(m_steam^2 + m_reg^2) / rho_f",
-                residual=self._steam_friction,
             ),
-            Equation(
-                "water_pressure",
-                y=("water_in.p", "p_v"),
-                unit="Pa",
-                doc="p_water = p_v",
-                residual=lambda t, x, xp: x["water_in.p"] - x["p_v"],
-            ),
-            Equation(
-                "outlet_pressure",
-                y=("outlet.p", "p_v"),
-                unit="Pa",
-                doc="p_out = p_v",
-                residual=lambda t, x, xp: x["outlet.p"] - x["p_v"],
-            ),
-            Equation(
-                "temperature",
-                y=("T", "p_v", "h_v"),
-                unit="K",
-                doc="T = T(p_v, h_v)",
-                residual=lambda t, x, xp: x["T"] - self._states(x)[0][1],
-            ),
+            Equation("water_pressure", y=("water_in.p", "p_v"), unit="Pa", doc="p_water = p_v"),
+            Equation("outlet_pressure", y=("outlet.p", "p_v"), unit="Pa", doc="p_out = p_v"),
+            Equation("temperature", y=("T", "p_v", "h_v"), unit="K", doc="T = T(p_v, h_v)"),
         ]
 
-    def prepare(self, t, x, xp):
-        """The states of ``_states``, once per residual evaluation (``x.work``)."""
-        return self._properties(x)
+    #: the names ``row_values`` reads from y, in its order
+    ROW_READS = (
+        "m_steam",
+        "m_water",
+        "m_out",
+        "M",
+        "U",
+        "p_v",
+        "h_v",
+        "T",
+        "steam_in.p",
+        "steam_in.h",
+        "water_in.p",
+        "water_in.h",
+        "outlet.p",
+        "outlet.h",
+    )
 
-    def _states(self, x):
-        """(T, rho, u) at the steam node [0] and in the volume [1]: ``x.work`` in a
-        residual evaluation (``prepare``), else computed."""
-        return x.work if x.work is not None else self._properties(x)
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        return self.ROW_READS, ("M", "U")
 
-    def _properties(self, x):
-        """``PropertyArrays`` calls the medium only for the points that changed."""
-        return self._props(
-            self.medium,
-            np.array([x["steam_in.p"], x["p_v"]]),
-            np.array([x["steam_in.h"], x["h_v"]]),
+    def row_values(self, t, v, vp, modes):
+        """The equations of the class doc, in their order, their residuals: mass [kg/s],
+        energy [W], density [kg], internal_energy [J], steam_friction [Pa],
+        water_pressure [Pa], outlet_pressure [Pa], temperature [K]. One property call
+        (``PropertyArrays``) for the steam node [0] and the volume [1]."""
+        m_s, m_w, m_o, M, U, p_v, h_v, T, p_s, h_s, p_w, h_w, p_o, h_o = v
+        dM, dU = vp
+        T_st, rho, u = self._props(self.medium, np.array([p_s, p_v]), np.array([h_s, h_v]))
+        eps = self.m_eps
+        E_in = (
+            energy_in(m_s, h_s, h_v, eps)
+            + energy_in(m_w, h_w, h_v, eps)
+            + energy_in(-m_o, h_o, h_v, eps)
         )
-
-    def _energy_in(self, x):
-        hv, eps = x["h_v"], self.m_eps
-        return (
-            energy_in(x["m_steam"], x["steam_in.h"], hv, eps)
-            + energy_in(x["m_water"], x["water_in.h"], hv, eps)
-            + energy_in(-x["m_out"], x["outlet.h"], hv, eps)
-        )
-
-    def _steam_friction(self, t, x, xp):
-        rho = self._states(x)[1]
-        ms = x["m_steam"]
-        rho_f = upwind_mean(ms, rho[0], rho[1], self.m_eps)
-        return x["steam_in.p"] - x["p_v"] - friction_dp(self.params["k"], ms, rho_f, self.m_reg)
+        rho_f = upwind_mean(m_s, rho[0], rho[1], eps)
+        return [
+            dM - (m_s + m_w - m_o),
+            dU - E_in,
+            M - self.params["V"] * rho[1],
+            U - M * u[1],
+            p_s - p_v - friction_dp(self.params["k"], m_s, rho_f, self.m_reg),
+            p_w - p_v,
+            p_o - p_v,
+            T - T_st[1],
+        ]
 
     def guess_nodes(self, t0):
         P = self.params

@@ -16,10 +16,17 @@ A component declares, in plain Python:
   A vector equation (``Equation(..., size=n)``) declares n rows "name[0]" ...
   "name[n-1]" at once, each with its own dependencies (``y=lambda i: ...``), and
   one residual function returning the n values (a pipe's n mass balances);
-* ``residual(t, x, xp)``: the residuals, in the order of ``equations()`` (derived
-  from the equations' own residual functions unless overridden; ``prepare(t, x,
-  xp)`` computes once what several equations share, e.g. one property call for
-  all volumes, and hands it to them as ``x.work``);
+* the residuals, in the order of ``equations()``, written once, in one of two ways:
+  each ``Equation`` carries its residual function (``residual=f(t, x, xp)``;
+  ``prepare(t, x, xp)`` computes once what several equations share, e.g. one
+  property call for all volumes, and hands it to them as ``x.work``), or the
+  component gives ``row_reads()`` (the local names it reads from y and y') and
+  ``row_values(t, v, vp, modes)``, all its residuals on plain floats from those
+  values, and its ``Equation`` declarations carry no functions (the boundaries,
+  valves, sensors, controllers, attemperators and junctions: the System evaluates
+  them together in one ``ScalarRows`` over plant-wide index arrays). In both ways
+  ``residual(t, x, xp)`` is derived (a component may also override it, as the pipe
+  does);
 * switch functions (``Switch``) with their actions, for discrete state;
 * ``initial_guess``: values for its variables before initialisation.
 
@@ -77,6 +84,8 @@ __all__ = [
     "Output",
     "LocalVector",
     "Component",
+    "ScalarRows",
+    "ROWS_KEY",
 ]
 
 
@@ -306,6 +315,8 @@ class Equation:
     residual: ``f(t, x, xp) -> float``. When every equation of a component has one,
     ``Component.residual`` is derived from the list (in its order), so the docs
     (``dnasim components``), the sparsity and the residual come from one place.
+    A component with ``row_reads`` gives none: its equations' residuals are written
+    once, together, in ``Component.row_values``.
 
     A vector equation (``size=n``, e.g. the mass balance of each of a pipe's n
     volumes) stands for n scalar rows named "name[0]" ... "name[n-1]". Then ``y``
@@ -419,6 +430,75 @@ class LocalVector:
 
     def __contains__(self, name):
         return name in self.index
+
+
+#: the ``Component.batch_key`` of components evaluated by ``ScalarRows``, whatever their class
+ROWS_KEY = "ScalarRows"
+
+
+class ScalarRows:
+    """The residual rows of several components with ``row_reads``, evaluated as one
+    unit of the System (``dnasim.system.evaluation_units``): the values each one reads
+    gathered from the plant-wide y and y' through index arrays made once (one gather and
+    one ``tolist`` for all of them), each component's ``row_values`` on its part, and
+    all rows written into F at once. Each such component writes its equations once,
+    in ``row_values`` (on plain floats); its ``equations()`` declare their names,
+    dependencies, units and docs without residual functions, and its
+    ``Component.residual`` (the path of tests and of callers outside the System's
+    evaluation) looks the names of ``row_reads`` up in x, xp and calls the same
+    ``row_values``, so both paths give the same rows to the bit
+    (tests/test_scalar_rows.py).
+
+    ``blocks``: the System's ``ComponentBlock``s (component, local -> global indices
+    ``gidx``, local names ``index``, rows ``eq_slice``, discrete ``modes``)."""
+
+    def __init__(self, blocks):
+        self.blocks = list(blocks)
+        #: the components' names, in the order of their rows (as ``PipeBatch.names``)
+        self.names = [b.comp.name for b in self.blocks]
+        y_at, yp_at, rows, self.items = [], [], [], []
+        for b in self.blocks:
+            reads_y, reads_yp = b.comp.row_reads()
+            sy = slice(len(y_at), len(y_at) + len(reads_y))
+            syp = slice(len(yp_at), len(yp_at) + len(reads_yp))
+            y_at += [b.gidx[_position(b, name)] for name in reads_y]
+            yp_at += [b.gidx[_position(b, name)] for name in reads_yp]
+            rows += range(b.eq_slice.start, b.eq_slice.stop)
+            self.items.append((b.comp.row_values, sy, syp, b.modes))
+        self.y_at = np.array(y_at, dtype=np.intp)
+        self.yp_at = np.array(yp_at, dtype=np.intp)
+        self.rows = np.array(rows, dtype=np.intp)
+
+    def residual_into(self, t, y, yp, F) -> None:
+        """F[rows of the components] = their residuals at (t, y, y') (global vectors)."""
+        v = y[self.y_at].tolist()
+        vp = yp[self.yp_at].tolist()
+        out = []
+        for values, sy, syp, modes in self.items:
+            out += values(t, v[sy], vp[syp], modes)
+        if len(out) != self.rows.size:
+            self._count_error(t, v, vp)
+        F[self.rows] = out
+
+    def _count_error(self, t, v, vp):
+        for b, (values, sy, syp, modes) in zip(self.blocks, self.items, strict=True):
+            n, declared = len(values(t, v[sy], vp[syp], modes)), b.eq_slice.stop - b.eq_slice.start
+            if n != declared:
+                raise PlantError(
+                    f"component '{b.comp.name}' ({type(b.comp).__name__}): row_values gave {n} "
+                    f"residuals but it declares {declared} equations"
+                )
+
+
+def _position(block, name) -> int:
+    """The local position of ``name`` in a System block (a scalar: not a whole vector)."""
+    k = block.index.get(name)
+    if k is None or isinstance(k, slice):
+        raise PlantError(
+            f"component '{block.comp.name}' ({type(block.comp).__name__}): row_reads names "
+            f"'{name}', which is not one of its scalar variables, port values or signal inputs"
+        )
+    return k
 
 
 def _check_number(comp, param, value):
@@ -661,13 +741,23 @@ class Component:
         return state
 
     def residual(self, t: float, x: LocalVector, xp: LocalVector) -> np.ndarray:
-        """F of the component's equations: by default each declared
-        ``Equation.residual`` in the order of ``equations()`` (a component whose
-        equations carry no functions overrides this method)."""
+        """F of the component's equations, in the order of ``equations()``.
+
+        A component with ``row_reads`` (its equations written once, in ``row_values``):
+        the values of the names of ``row_reads()`` looked up in x and xp, then
+        ``row_values``; the System evaluates it without this look-up, in a
+        ``ScalarRows``, from the same function. Otherwise each declared
+        ``Equation.residual`` (a component whose equations carry no functions
+        overrides this method)."""
         declared = self.__dict__.get("_declared")
         if declared is None:
             declared = self._declared = self._declare_residuals()
-        eqs, functions, total = declared
+        reads, eqs, functions, total = declared
+        if reads is not None:
+            return np.array(
+                self.row_values(t, [x[n] for n in reads[0]], [xp[n] for n in reads[1]], x.modes),
+                dtype=float,
+            )
         x.work = self.prepare(t, x, xp)
         if functions is not None:  # scalar equations only: one value each
             return np.array([f(t, x, xp) for f in functions], dtype=float)
@@ -686,10 +776,14 @@ class Component:
         return out
 
     def _declare_residuals(self):
-        """(equations, their residual functions when every one is scalar, else None,
-        the number of rows), made once per component (``residual``'s per-call work is
-        the calls alone)."""
+        """(``row_reads()``, equations, their residual functions when every one is
+        scalar, else None, the number of rows), made once per component
+        (``residual``'s per-call work is the calls alone)."""
+        reads = self.rows_checked()
         eqs = self.equations()
+        total = sum(e.n_rows for e in eqs)
+        if reads is not None:
+            return reads, eqs, None, total
         missing = [e.name for e in eqs if e.residual is None]
         if missing:
             raise NotImplementedError(
@@ -697,8 +791,61 @@ class Component:
                 f"{', '.join(missing)} declare no residual function"
             )
         scalar = all(e.size is None for e in eqs)
-        total = sum(e.n_rows for e in eqs)
-        return eqs, (tuple(e.residual for e in eqs) if scalar else None), total
+        return None, eqs, (tuple(e.residual for e in eqs) if scalar else None), total
+
+    # ------------------------------------------------------------ scalar rows
+    def row_reads(self) -> tuple[tuple[str, ...], tuple[str, ...]] | None:
+        """The local names ``row_values`` reads from y and from y', or None (the
+        default): the component's equations carry their residual functions
+        (``Equation.residual``) and it is evaluated alone by ``residual``.
+
+        A component that gives them writes its equations once, in ``row_values``
+        (its ``Equation`` declarations keep the names, dependencies, units and docs,
+        without residual functions). The System evaluates it with the others that
+        do in one ``ScalarRows`` unit (``batch_key``): their values gathered from the
+        plant-wide vectors through index arrays made once, no ``LocalVector`` and no
+        name look-up per value; ``residual`` looks the same names up in x, xp and
+        calls the same ``row_values``."""
+        return None
+
+    def row_values(self, t: float, v: list, vp: list, modes: dict) -> list:
+        """The residuals of ``equations()`` in their order, from v and vp: the values
+        [SI] of the names of ``row_reads()`` (y and y'), and the component's discrete
+        ``modes``. Only with ``row_reads``."""
+        raise NotImplementedError
+
+    def rows_checked(self):
+        """``row_reads()``, after checking that the equations are written once: a
+        component with ``row_reads`` (e.g. a subclass of one) whose ``equations()``
+        carry residual functions would have two definitions; PlantError. Checked once
+        per component (the System asks for each set of blocks it evaluates)."""
+        if "_checked_reads" in self.__dict__:
+            return self._checked_reads
+        reads = self.row_reads()
+        if reads is not None:
+            twice = [e.name for e in self.equations() if e.residual is not None]
+            if twice:
+                raise PlantError(
+                    f"component '{self.name}' ({type(self).__name__}): equation(s) "
+                    f"{', '.join(twice)} carry residual functions, but the class writes its "
+                    "equations in row_values (it has row_reads); write them in one place: "
+                    "override row_values, or return None from row_reads"
+                )
+        self._checked_reads = reads
+        return reads
+
+    def batch_key(self):
+        """Components with equal keys are evaluated together by ``batch(blocks)``
+        (``dnasim.system.evaluation_units``); ``ROWS_KEY`` for a component with
+        ``row_reads`` (all of them in one ``ScalarRows``, whatever their class: a
+        subclass that overrides ``row_values`` is evaluated by its own, on both
+        paths), else None: alone, by ``residual``."""
+        return None if self.rows_checked() is None else ROWS_KEY
+
+    @staticmethod
+    def batch(blocks):
+        """The ``ScalarRows`` of the System blocks of components with ``row_reads``."""
+        return ScalarRows(blocks)
 
     def prepare(self, t: float, x: LocalVector, xp: LocalVector):
         """Hook: what several equations share, computed once per residual evaluation

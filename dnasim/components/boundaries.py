@@ -210,18 +210,50 @@ class _Boundary(Component):
                 y=dep,
                 unit="J/kg",
                 doc="h_supply = h, h(p, T) or h_px(p, x)",
-                residual=lambda t, x, xp: (
-                    x["h_supply"] - self.supply_h(t, self.supply_pressure(t, x))
-                ),
             )
         ]
 
-    def energy_flow(self, x):
-        """E [W] into the plant (see the module doc)."""
-        h_own = x["h_supply"] if self.has_supply else x["port.h"]
+    def supply_pressure(self, t, x):
+        """The pressure of the supply state [Pa] (``supply_p``), the node's from x."""
+        return self.supply_p(t, x["port.p"])
+
+    def supply_p(self, t, p_node) -> float:
+        """The pressure of the supply state [Pa] at the node pressure p_node [Pa]."""
+        raise NotImplementedError
+
+    def own_reads(self) -> tuple[str, ...]:
+        """The names the first equation (``first_row``) reads besides m and port.p (the
+        last of ``row_reads``)."""
+        return ()
+
+    def first_row(self, t, m, p_node, v) -> float:
+        """The residual of the class's first equation (pressure or flow) from m [kg/s],
+        the node pressure [Pa] and v, the values of ``row_reads`` (``own_reads`` last)."""
+        raise NotImplementedError
+
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        supply = ("h_supply",) if self.has_supply else ()
+        return ("m", "port.p", "port.h") + supply + self.own_reads(), ("M_passed", "H_passed")
+
+    def row_values(self, t, v, vp, modes):
+        """The equations of the class doc, in their order, their residuals:
+
+        first          ``first_row``: pressure [Pa] or flow [kg/s]
+        supply         h_supply - h_supply(t, p)                        [J/kg]
+                       (h or T or x given; p from ``supply_p``)
+        mass_passed    dM_passed/dt - m                                 [kg/s]
+        energy_passed  dH_passed/dt - E,  E = w(m) h_supply - w(-m) h_node   [W]
+        """
+        m, p_node, h_node = v[0], v[1], v[2]
+        out = [self.first_row(t, m, p_node, v)]
+        if self.has_supply:
+            out.append(v[3] - self.supply_h(t, self.supply_p(t, p_node)))
+        h_own = v[3] if self.has_supply else h_node
         # energy_in gives the flow into the boundary (flow -m into it); the plant
         # receives minus that
-        return -float(energy_in(-x["m"], x["port.h"], h_own, self.m_eps))
+        energy = -float(energy_in(-m, h_node, h_own, self.m_eps))
+        return out + [vp[0] - m, vp[1] - energy]
 
     def accumulator_equations(self):
         dep = ("m", "port.h") + (("h_supply",) if self.has_supply else ())
@@ -232,7 +264,6 @@ class _Boundary(Component):
                 yp=("M_passed",),
                 unit="kg/s",
                 doc="dM_passed/dt = m",
-                residual=lambda t, x, xp: xp["M_passed"] - x["m"],
             ),
             Equation(
                 "energy_passed",
@@ -240,7 +271,6 @@ class _Boundary(Component):
                 yp=("H_passed",),
                 unit="W",
                 doc="dH_passed/dt = E = w(m) h_supply - w(-m) h_node",
-                residual=lambda t, x, xp: xp["H_passed"] - self.energy_flow(x),
             ),
         ]
 
@@ -332,20 +362,17 @@ class PressureBoundary(_Boundary):
         FluidPort("port", "outlet", "m", "fixed", "m > 0 into the plant; h or T: inflow state"),
     )
 
-    def supply_pressure(self, t, x):
+    def supply_p(self, t, p_node):
         return self.param_at("p", t)
 
+    def first_row(self, t, m, p_node, v):
+        """pressure: p_node - p(t) [Pa]."""
+        return p_node - self.param_at("p", t)
+
     def equations(self):
+        """The equations of the class doc (their residuals: ``row_values``)."""
         return (
-            [
-                Equation(
-                    "pressure",
-                    y=("port.p",),
-                    unit="Pa",
-                    doc="p_node = p(t)",
-                    residual=lambda t, x, xp: x["port.p"] - self.param_at("p", t),
-                )
-            ]
+            [Equation("pressure", y=("port.p",), unit="Pa", doc="p_node = p(t)")]
             + self.supply_equations(())
             + self.accumulator_equations()
         )
@@ -416,28 +443,35 @@ class MassFlowBoundary(_Boundary):
         FluidPort("port", "outlet", "m", "none", "m > 0 into the plant; h or T: inflow state"),
     )
 
-    def supply_pressure(self, t, x):
-        return x["port.p"]
+    def supply_p(self, t, p_node):
+        return p_node
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.params["m"] is None else []
 
-    def flow_set(self, t, x):
-        """The prescribed flow m(t) [kg/s]: the parameter, or the signal input m_in."""
+    def flow_set(self, t, m_in=None):
+        """The prescribed flow m(t) [kg/s]: the parameter, or m_scale times the signal
+        input's value m_in [1]."""
         if self.params["m"] is None:
-            return self.params["m_scale"] * x["m_in"]
+            return self.params["m_scale"] * m_in
         return self.param_at("m", t)
 
+    def own_reads(self):
+        return ("m_in",) if self.params["m"] is None else ()
+
+    def first_row(self, t, m, p_node, v):
+        """flow: m - m(t) [kg/s] (``flow_set``; m_in the last value of v)."""
+        return m - self.flow_set(t, v[-1] if self.params["m"] is None else None)
+
     def equations(self):
-        signal = ("m_in",) if self.params["m"] is None else ()
+        """The equations of the class doc (their residuals: ``row_values``)."""
         return (
             [
                 Equation(
                     "flow",
-                    y=("m",) + signal,
+                    y=("m",) + self.own_reads(),
                     unit="kg/s",
                     doc="m = m(t), or m = m_scale m_in from the signal",
-                    residual=lambda t, x, xp: x["m"] - self.flow_set(t, x),
                 )
             ]
             + self.supply_equations(("port.p",))
@@ -450,7 +484,7 @@ class MassFlowBoundary(_Boundary):
         return {"port": (None, self.param_at("h", t0))}
 
     def initial_guess(self, t0, x):
-        x["m"] = self.flow_set(t0, x)
+        x["m"] = self.flow_set(t0, *(x[n] for n in self.own_reads()))
         super().initial_guess(t0, x)
         if self.has_supply and self.params["h"] is None and x["m"] > 0:
             x["port.h"] = x["h_supply"]

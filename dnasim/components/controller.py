@@ -190,47 +190,56 @@ class PIController(Component):
         ]
 
     def equations(self):
-        P = self.params
+        """The equations of the class doc (their residuals: ``row_values``)."""
         return [
             Equation(
                 "error",
                 y=("e", "measured", *(("set_point",) if self.setpoint_from_signal else ())),
                 doc="e = sign (measured - w)   (10.13a)",
-                residual=lambda t, x, xp: (
-                    x["e"] - self.sign * (x["measured"] - self.set_point_value(t, x))
-                ),
             ),
-            Equation(
-                "proportional",
-                y=("m_p", "e"),
-                doc="m_p = Kp e",
-                residual=lambda t, x, xp: x["m_p"] - P["Kp"] * x["e"],
-            ),
+            Equation("proportional", y=("m_p", "e"), doc="m_p = Kp e"),
             Equation(
                 "integral",
                 y=("e",),
                 yp=("m_I",),
                 doc="dm_I/dt = KI e (0 while saturated with anti-windup)   (10.13c)",
-                residual=self._integral,
             ),
             Equation(
                 "output",
                 y=("z", "m_p", "m_I"),
                 doc="z = m_p + m_I (free), z_max (high), z_min (low)   (10.13b)",
-                residual=self._output,
             ),
         ]
 
-    def _integral(self, t, x, xp):
-        P = self.params
-        hold = P["anti_windup"] and self._mode(x) != "free"
-        return xp["m_I"] - (0.0 if hold else P["KI"] * x["e"])
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        w = ("set_point",) if self.setpoint_from_signal else ()
+        return ("e", "measured", "m_p", "m_I", "z") + w, ("m_I",)
 
-    def _output(self, t, x, xp):
-        mode = self._mode(x)
+    def row_values(self, t, v, vp, modes):
+        """The equations of the class doc, their residuals [output unit, its rate for
+        the integral], in the discrete mode ``modes["mode"]``:
+
+          error         e - s (measured - w)
+          proportional  m_p - Kp e
+          integral      dm_I/dt - KI e      (dm_I/dt while saturated, if anti_windup)
+          output        z - (m_p + m_I)     (free),  z - z_max (high),  z - z_min (low)
+        """
+        P = self.params
+        e, measured, m_p, m_I, z, *w = v
+        w = w[0] if self.setpoint_from_signal else self.param_at("setpoint", t)
+        mode = modes.get("mode", "free")
+        hold = P["anti_windup"] and mode != "free"
         if mode == "free":
-            return x["z"] - (x["m_p"] + x["m_I"])
-        return x["z"] - (self.params["z_max"] if mode == "high" else self.params["z_min"])
+            output = z - (m_p + m_I)
+        else:
+            output = z - (P["z_max"] if mode == "high" else P["z_min"])
+        return [
+            e - self.sign * (measured - w),
+            m_p - P["Kp"] * e,
+            vp[0] - (0.0 if hold else P["KI"] * e),
+            output,
+        ]
 
     # ----------------------------------------------------------------- switches
     def _gain_sign(self):

@@ -29,61 +29,67 @@ class _Junction(Component):
     def port_names(self) -> list[str]:
         raise NotImplementedError
 
-    def flows_in(self, x) -> np.ndarray:
-        """Flows into the junction at each port (order of port_names)."""
-        raise NotImplementedError
-
     def flow_names(self) -> list[str]:
         raise NotImplementedError
 
+    def flows_in(self, m) -> np.ndarray:
+        """The flows into the junction [kg/s] at each port (order of port_names), from
+        the values m of ``flow_names`` (an inlet's flow counts in, an outlet's out)."""
+        into = self.__dict__.get("_into")
+        if into is None:  # per port: its flow variable counts into the junction
+            into = self._into = [p.role == "inlet" for p in self.fluid_ports()]
+        return np.array([m_k if inward else -m_k for m_k, inward in zip(m, into, strict=True)])
+
     def equations(self):
-        """The equations of the module doc, each with its dependencies and residual."""
+        """The equations of the module doc (their residuals: ``row_values``)."""
         ports = self.port_names()
         flows = tuple(self.flow_names())
         hs = tuple(f"{p}.h" for p in ports)
         last = ports[-1]
         eqs = [
-            Equation(
-                "mass",
-                y=flows,
-                unit="kg/s",
-                doc="sum_k m_k = 0 (m_k into the junction)",
-                residual=lambda t, x, xp: x.work.sum(),
-            ),
+            Equation("mass", y=flows, unit="kg/s", doc="sum_k m_k = 0 (m_k into the junction)"),
             Equation(
                 "mixing",
                 y=flows + hs + ("h_mix",),
                 unit="W",
                 doc="sum_k w(m_k) (h_k - h_mix) = 0",
-                residual=self._mixing,
             ),
         ]
         eqs += [
-            Equation(
-                f"pressure_{p}",
-                y=(f"{p}.p", f"{last}.p"),
-                unit="Pa",
-                doc=f"p_{p} = p_{last}",
-                residual=lambda t, x, xp, a=f"{p}.p", b=f"{last}.p": x[a] - x[b],
-            )
+            Equation(f"pressure_{p}", y=(f"{p}.p", f"{last}.p"), unit="Pa", doc=f"p_{p} = p_{last}")
             for p in ports[:-1]
         ]
         return eqs
 
-    def prepare(self, t, x, xp):
-        """The flows into the junction (``flows_in``), once per evaluation (``x.work``)."""
-        return self.flows_in(x)
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``): the flows, the
+        ports' enthalpies, h_mix and the ports' pressures."""
+        ports = self.port_names()
+        return (
+            tuple(self.flow_names())
+            + tuple(f"{p}.h" for p in ports)
+            + ("h_mix",)
+            + tuple(f"{p}.p" for p in ports)
+        ), ()
 
-    def _mixing(self, t, x, xp):
-        h_names = self.__dict__.get("_h_names")
-        if h_names is None:
-            h_names = self._h_names = [f"{p}.h" for p in self.port_names()]
-        h = np.array([x[name] for name in h_names])
-        return np.dot(upwind_weight(x.work, self.m_eps), h - x["h_mix"])
+    def row_values(self, t, v, vp, modes):
+        """The equations of the module doc, their residuals:
+
+        mass         sum_k m_k                      [kg/s]
+        mixing       sum_k w(m_k) (h_k - h_mix)     [W]
+        pressure_k   p_k - p_last                   [Pa]   (every port but the last)
+        """
+        n = len(self.port_names())
+        m = self.flows_in(v[:n])
+        h = np.array(v[n : 2 * n])
+        h_mix = v[2 * n]
+        p = v[2 * n + 1 :]
+        mixing = np.dot(upwind_weight(m, self.m_eps), h - h_mix)
+        return [m.sum(), mixing] + [p_k - p[-1] for p_k in p[:-1]]
 
     def initial_guess(self, t0, x):
         ports = self.port_names()
-        m = self.flows_in(x)
+        m = self.flows_in([x[n] for n in self.flow_names()])
         w = upwind_weight(m, self.m_eps)
         h = np.array([x[f"{p}.h"] for p in ports])
         x["h_mix"] = float(np.dot(w, h) / w.sum())
@@ -116,9 +122,6 @@ class Mixer(_Junction):
 
     def flow_names(self):
         return [f"m_in[{k}]" for k in range(self.params["n_inlets"])] + ["m_out"]
-
-    def flows_in(self, x):
-        return np.concatenate((x["m_in"], [-x["m_out"]]))
 
     def fluid_ports(self):
         n = self.params["n_inlets"]
@@ -181,9 +184,6 @@ class Splitter(_Junction):
 
     def flow_names(self):
         return ["m_in"] + [f"m_out[{k}]" for k in range(self.params["n_outlets"])]
-
-    def flows_in(self, x):
-        return np.concatenate(([x["m_in"]], -x["m_out"]))
 
     def fluid_ports(self):
         n = self.params["n_outlets"]

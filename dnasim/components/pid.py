@@ -252,47 +252,25 @@ class PIDController(Component):
     def _automatic(self, t) -> bool:
         return self.param_at("active", t) >= 0.5
 
-    def _z_track(self, t, x) -> float:
-        if self.params["tracking"]:
-            return x["track"]
-        return self.param_at("z_manual", t)
-
     def equations(self):
-        sign, Kp = self.sign, self.Kp
+        """The equations of the class doc (their residuals: ``row_values``)."""
         track = ("track",) if self.params["tracking"] else ()
         w = ("set_point",) if self.setpoint_from_signal else ()
         w_d = w if self.params["c_d"] != 0.0 else ()
         eqs = [
-            Equation(
-                "error",
-                y=("e", "measured", *w),
-                doc="e = s (measured - w)",
-                residual=lambda t, x, xp: (
-                    x["e"] - sign * (x["measured"] - self.set_point_value(t, x))
-                ),
-            ),
-            Equation(
-                "proportional",
-                y=("m_p", "e"),
-                doc="m_p = Kp e",
-                residual=lambda t, x, xp: x["m_p"] - Kp * x["e"],
-            ),
+            Equation("error", y=("e", "measured", *w), doc="e = s (measured - w)"),
+            Equation("proportional", y=("m_p", "e"), doc="m_p = Kp e"),
         ]
         if self.has_d:
-            N, T_f = self.params["N"], self.params["T_d"] / self.params["N"]
             eqs += [
                 Equation(
                     "filter",
                     y=("x_f", "measured", *w_d),
                     yp=("x_f",),
                     doc="(T_d/N) dx_f/dt = e_D - x_f",
-                    residual=lambda t, x, xp: T_f * xp["x_f"] - (self._e_d(t, x) - x["x_f"]),
                 ),
                 Equation(
-                    "derivative",
-                    y=("m_D", "x_f", "measured", *w_d),
-                    doc="m_D = Kp N (e_D - x_f)",
-                    residual=lambda t, x, xp: x["m_D"] - Kp * N * (self._e_d(t, x) - x["x_f"]),
+                    "derivative", y=("m_D", "x_f", "measured", *w_d), doc="m_D = Kp N (e_D - x_f)"
                 ),
             ]
         d = ("m_D",) if self.has_d else ()
@@ -302,43 +280,72 @@ class PIDController(Component):
                 y=("e", "z", "v", *track),
                 yp=("m_I",),
                 doc="dm_I/dt = Kp/T_i e + (z - v)/T_t (automatic), (z_track - v)/T_t (manual)",
-                residual=self._integral,
             ),
-            Equation(
-                "demand",
-                y=("v", "m_p", "m_I", *d),
-                doc="v = m_p + m_I + m_D",
-                residual=lambda t, x, xp: x["v"] - x["m_p"] - x["m_I"] - (x["m_D"] if d else 0.0),
-            ),
+            Equation("demand", y=("v", "m_p", "m_I", *d), doc="v = m_p + m_I + m_D"),
             Equation(
                 "output",
                 y=("z", "v", *(track if self.has_manual else ())),
                 doc="z = v (free), z_max (high), z_min (low), z_track (manual)",
-                residual=self._output,
             ),
         ]
         return eqs
 
-    def _e_d(self, t, x):
-        return self.sign * (x["measured"] - self.params["c_d"] * self.set_point_value(t, x))
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        d = ("x_f", "m_D") if self.has_d else ()
+        track = ("track",) if self.params["tracking"] else ()
+        w = ("set_point",) if self.setpoint_from_signal else ()
+        reads_yp = ("m_I", "x_f") if self.has_d else ("m_I",)
+        return ("e", "measured", "m_p", "m_I", *d, "v", "z", *track, *w), reads_yp
 
-    def _integral(self, t, x, xp):
-        P = self.params
-        if not self._automatic(t):
-            return xp["m_I"] - (self._z_track(t, x) - x["v"]) / self.T_t
-        rate = self.Kp / P["T_i"] * x["e"] if P["T_i"] is not None else 0.0
-        if P["anti_windup"] and P["T_i"] is not None:
-            z = x["track"] if P["tracking"] else x["z"]
-            rate += (z - x["v"]) / self.T_t
-        return xp["m_I"] - rate
+    def row_values(self, t, v, vp, modes):
+        """The equations of the class doc, in the order of ``equations()``, their
+        residuals ([m] error and filter, [u] the parts and the output, [u/s] the
+        integral), in automatic (mode ``modes["mode"]``) or manual:
 
-    def _output(self, t, x, xp):
+          error         e - s (measured - w)
+          proportional  m_p - Kp e
+          filter        (T_d/N) dx_f/dt - (e_D - x_f)                    (T_d > 0)
+          derivative    m_D - Kp N (e_D - x_f)                           (T_d > 0)
+          integral      dm_I/dt - (Kp/T_i e + (z_a - v)/T_t)   automatic, anti_windup
+                        (z_a = track with tracking, else z)
+                        dm_I/dt - Kp/T_i e                     automatic, no anti-windup
+                        (dm_I/dt without an I part)
+                        dm_I/dt - (z_track - v)/T_t            manual
+          demand        v - m_p - m_I - m_D                    (m_D = 0 without a D part)
+          output        z - v (free), z - z_max (high), z - z_min (low), z - z_track (manual)
+        """
+        P, Kp, has_d, tracking = self.params, self.Kp, self.has_d, self.params["tracking"]
+        e, measured, m_p, m_I = v[0], v[1], v[2], v[3]
+        k = 6 if has_d else 4  # the position of v (the demand) in ``row_reads``
+        x_f, m_D = (v[4], v[5]) if has_d else (0.0, 0.0)
+        dem, z = v[k], v[k + 1]
+        track = v[k + 2] if tracking else None
+        w = v[-1] if self.setpoint_from_signal else self.param_at("setpoint", t)
+        out = [e - self.sign * (measured - w), m_p - Kp * e]
+        if has_d:
+            N = P["N"]
+            e_d = self._e_d(measured, w)
+            out += [P["T_d"] / N * vp[1] - (e_d - x_f), m_D - Kp * N * (e_d - x_f)]
         if not self._automatic(t):
-            return x["z"] - self._z_track(t, x)
-        mode = self._mode(x)
-        if mode == "free":
-            return x["z"] - x["v"]
-        return x["z"] - (self.params["z_max"] if mode == "high" else self.params["z_min"])
+            z_track = track if tracking else self.param_at("z_manual", t)
+            integral = vp[0] - (z_track - dem) / self.T_t
+            output = z - z_track
+        else:
+            rate = Kp / P["T_i"] * e if P["T_i"] is not None else 0.0
+            if P["anti_windup"] and P["T_i"] is not None:
+                rate += ((track if tracking else z) - dem) / self.T_t
+            integral = vp[0] - rate
+            mode = modes.get("mode", "free")
+            if mode == "free":
+                output = z - dem
+            else:
+                output = z - (P["z_max"] if mode == "high" else P["z_min"])
+        return out + [integral, dem - m_p - m_I - m_D, output]
+
+    def _e_d(self, measured, w) -> float:
+        """e_D = s (measured - c_d w) [m], the D part's error."""
+        return self.sign * (measured - self.params["c_d"] * w)
 
     # ------------------------------------------------------------- switches
     def reset_discrete_state(self, modes):
@@ -386,6 +393,6 @@ class PIDController(Component):
         x["m_p"] = 0.0
         x["v"] = P["integral0"]
         if self.has_d:
-            x["x_f"] = self._e_d(t0, x)
+            x["x_f"] = self._e_d(x["measured"], self.set_point_value(t0, x))
             x["m_D"] = 0.0
         x["z"] = min(max(P["integral0"], P["z_min"]), P["z_max"])

@@ -68,9 +68,9 @@ class _Sensor(Component):
         return [Variable(name, unit, nominal, doc=doc)]
 
     def equations(self):
+        """The lag of the module doc (its residual: ``row_values``)."""
         y = self.Y[0]
-        tau = self.T_lag
-        if tau > 0:
+        if self.T_lag > 0:
             return [
                 Equation(
                     "lag",
@@ -78,25 +78,34 @@ class _Sensor(Component):
                     yp=(y,),
                     unit=self.Y[1],
                     doc=f"T_lag d{y}/dt = q - {y}",
-                    residual=lambda t, x, xp: tau * xp[y] - (self._q(t, x) - x[y]),
                 )
             ]
-        return [
-            Equation(
-                "lag",
-                y=(y, *self.READS),
-                unit=self.Y[1],
-                doc=f"{y} = q (T_lag = 0)",
-                residual=lambda t, x, xp: x[y] - self._q(t, x),
-            )
-        ]
+        return [Equation("lag", y=(y, *self.READS), unit=self.Y[1], doc=f"{y} = q (T_lag = 0)")]
 
-    def _q(self, t, x) -> float:  # pragma: no cover - abstract
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``): ``READS``, then y."""
+        y = self.Y[0]
+        return (*self.READS, y), (y,)
+
+    def row_values(self, t, v, vp, modes):
+        """The lag of the module doc, its residual [unit of q, times s/s]:
+        lag  T_lag dy/dt - (q - y)   (T_lag > 0),   y - q   (T_lag = 0),
+        q = ``_q`` of the values of ``READS`` (the first of v)."""
+        y = v[-1]
+        q = self._q(t, v)
+        tau = self.T_lag
+        if tau > 0:
+            return [tau * vp[0] - (q - y)]
+        return [y - q]
+
+    def _q(self, t, values) -> float:  # pragma: no cover - abstract
+        """The quantity measured, q [unit of y], from the values of ``READS``, the
+        first of ``values`` (in order; more may follow)."""
         raise NotImplementedError
 
     def initial_guess(self, t0, x):
         y0 = self.params.get("y0")
-        x[self.Y[0]] = y0 if y0 is not None else self._q(t0, x)
+        x[self.Y[0]] = y0 if y0 is not None else self._q(t0, [x[n] for n in self.READS])
 
 
 class _NodeSensor(_Sensor):
@@ -119,8 +128,9 @@ class PressureSensor(_NodeSensor):
     SIGNAL_OUTPUTS = (SignalPort("p", "Pa", "measured pressure", variable="p_s"),)
     Y = ("p_s", "Pa", 1e5, "measured pressure")
 
-    def _q(self, t, x):
-        return x["port.p"]
+    def _q(self, t, values):
+        p = values[0]
+        return p
 
 
 class EnthalpySensor(_NodeSensor):
@@ -136,8 +146,9 @@ class EnthalpySensor(_NodeSensor):
     SIGNAL_OUTPUTS = (SignalPort("h", "J/kg", "measured specific enthalpy", variable="h_s"),)
     Y = ("h_s", "J/kg", 1e5, "measured specific enthalpy")
 
-    def _q(self, t, x):
-        return x["port.h"]
+    def _q(self, t, values):
+        h = values[1]
+        return h
 
 
 class TemperatureSensor(_NodeSensor):
@@ -173,14 +184,15 @@ class TemperatureSensor(_NodeSensor):
                 return self.params[key]
         return 1.0
 
-    def _q(self, t, x):
+    def _q(self, t, values):
         # one point: the medium's cached state (what ``physics.properties`` does for a
         # single point, without the arrays)
-        return self.medium.state(x["port.p"], x["port.h"]).T
+        p, h = values[0], values[1]
+        return self.medium.state(p, h).T
 
     def initial_guess(self, t0, x):
         T0 = self.params["T0"]
-        x["T_s"] = T0 if T0 is not None else self._q(t0, x)
+        x["T_s"] = T0 if T0 is not None else self._q(t0, [x["port.p"], x["port.h"]])
 
 
 class QualitySensor(_NodeSensor):
@@ -202,10 +214,11 @@ class QualitySensor(_NodeSensor):
     SIGNAL_OUTPUTS = (SignalPort("x", "1", "measured quality", variable="x_s"),)
     Y = ("x_s", "1", 1.0, "measured thermodynamic quality")
 
-    def _q(self, t, x):
-        hl, hv = self.medium.saturation_enthalpies([x["port.p"]])
+    def _q(self, t, values):
+        p, h = values[0], values[1]
+        hl, hv = self.medium.saturation_enthalpies([p])
         hl, hv = float(hl[0]), float(hv[0])
-        return (x["port.h"] - hl) / (hv - hl)
+        return (h - hl) / (hv - hl)
 
 
 class _SignalSensor(_Sensor):
@@ -213,8 +226,9 @@ class _SignalSensor(_Sensor):
     USES_MEDIUM = False
     READS = ("u",)
 
-    def _q(self, t, x):
-        return x["u"]
+    def _q(self, t, values):
+        u = values[0]
+        return u
 
 
 class MassFlowSensor(_SignalSensor):

@@ -84,25 +84,37 @@ class Valve(Component):
         return [Variable("m", "kg/s", self.params["m_nominal"], doc="mass flow")]
 
     def equations(self):
-        dep = ("m", "inlet.p", "outlet.p") + (("z",) if self.opening_from_signal else ())
+        """The flow equation of the class doc (its residual: ``row_values``)."""
         return [
             Equation(
                 "flow",
-                y=dep,
+                y=self.row_reads()[0],
                 unit="kg/s",
                 doc="m = C z_eff sqrt(dp) (regularised near dp = 0)",
-                residual=self._flow,
             )
         ]
 
-    def opening(self, t, x):
-        z = x["z"] if self.opening_from_signal else self.param_at("opening", t)
+    def effective_opening(self, t, z_signal=None) -> float:
+        """z_e = leakage + (1 - leakage) z [1], z the signal input's value z_signal or
+        the parameter ``opening`` at t."""
+        z = z_signal if self.opening_from_signal else self.param_at("opening", t)
         leak = self.params["leakage"]
         return leak + (1.0 - leak) * z
 
-    def _flow(self, t, x, xp):
-        dp = x["inlet.p"] - x["outlet.p"]
-        return x["m"] - valve_flow(self.params["C"], self.opening(t, x), dp, self.params["dp_reg"])
+    def opening(self, t, x):
+        """z_e [1] (``effective_opening``) with the signal input's value from x."""
+        return self.effective_opening(t, x["z"] if self.opening_from_signal else None)
+
+    def row_reads(self):
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        return ("m", "inlet.p", "outlet.p") + (("z",) if self.opening_from_signal else ()), ()
+
+    def row_values(self, t, v, vp, modes):
+        """The equation of the class doc, its residual [kg/s]:
+        flow  m - C z_e (p_in - p_out) / ((p_in - p_out)^2 + dp_reg^2)^(1/4)."""
+        m, p_in, p_out = v[0], v[1], v[2]
+        z_e = self.effective_opening(t, v[3] if self.opening_from_signal else None)
+        return [m - valve_flow(self.params["C"], z_e, p_in - p_out, self.params["dp_reg"])]
 
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
