@@ -44,6 +44,21 @@ def points(system, y0, yp0):
     yield y, yp0
 
 
+def assert_batched_equals_by_component(system, y0, yp0):
+    """The whole-plant residual (ScalarRows units) equals the per-component residuals
+    to the bit at the steady state and the moved points of ``points`` (a moved point
+    outside a medium's range is skipped); at least two points compared."""
+    compared = 0
+    for y, yp in points(system, y0, yp0):
+        try:
+            expected = by_component(system, 1.0, y, yp)
+        except Exception:  # a moved point outside a medium's range: not compared
+            continue
+        np.testing.assert_array_equal(system.residual(1.0, y, yp), expected)
+        compared += 1
+    assert compared >= 2  # the steady state and a point moved by 1e-6
+
+
 @pytest.mark.parametrize("name", ALL)
 def test_scalar_rows_equal_the_components_residuals_to_the_bit(name):
     # fails when the unit gathers a value from another place of y or y' than the
@@ -102,15 +117,7 @@ def test_scalar_rows_of_a_split_and_remixed_stream():
              for b in u.blocks}  # fmt: skip
     assert {"Splitter", "Mixer", "Valve", "TemperatureSensor"} <= kinds
     y0, yp0 = initial_values(system, 0.0, "steady")
-    compared = 0
-    for y, yp in points(system, y0, yp0):
-        try:
-            expected = by_component(system, 1.0, y, yp)
-        except Exception:  # a moved point outside a medium's range: not compared
-            continue
-        np.testing.assert_array_equal(system.residual(1.0, y, yp), expected)
-        compared += 1
-    assert compared >= 2  # the steady state and a point moved by 1e-6
+    assert_batched_equals_by_component(system, y0, yp0)
 
 
 def pid_loop(pid):
@@ -235,15 +242,7 @@ def test_sensors_and_flow_boundaries_rows():
         "MassFlowBoundary",
     } <= kinds
     y0, yp0 = initial_values(system, 0.0, "steady")
-    compared = 0
-    for y, yp in points(system, y0, yp0):
-        try:
-            expected = by_component(system, 1.0, y, yp)
-        except Exception:  # a moved point outside a medium's range: not compared
-            continue
-        np.testing.assert_array_equal(system.residual(1.0, y, yp), expected)
-        compared += 1
-    assert compared >= 2  # the steady state and a point moved by 1e-6
+    assert_batched_equals_by_component(system, y0, yp0)
     # the steady state the rows give, against the medium's own functions (nobody's
     # equations here): the readings are the node's p, h, T(p, h) and quality, the flow
     # sensor v1's flow, and the tap takes m_scale times the quality (signs: into the
