@@ -54,6 +54,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from revision import file_at
+
 ROOT = Path(__file__).resolve().parent.parent
 COMMIT = "ea86a1d"
 SMALL = ["air_pipe", "attemperator", "superheater_line"]
@@ -126,12 +128,9 @@ def plant_files(tmp: Path) -> dict[str, tuple[Path, str]]:
     pipe.write_text(PIPE_1000)
     files["pipe_1000"] = (pipe, PIPE_ATOL)
     for name in SMALL:
-        text = subprocess.run(
-            ["git", "-C", str(ROOT), "show", f"{COMMIT}:plants/{name}.toml"],
-            check=True,
-            capture_output=True,
-            text=True,
-        ).stdout
+        text = file_at(COMMIT, f"plants/{name}.toml")
+        if text is None:
+            raise SystemExit(f"git cannot show {COMMIT}:plants/{name}.toml in {ROOT}")
         atol, lines = None, []
         for line in text.splitlines():
             if line.replace(" ", "").startswith("atol="):
