@@ -82,8 +82,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from dnasim.errors import PlantError
-from dnasim.media.base import Medium, _as_arrays
+from dnasim.media.base import Medium, _as_arrays, transport_result
 from dnasim.media.errors import PropertyError
+from dnasim.media.gas_transport import MixtureTransport
 from dnasim.media.state import FluidState, FluidStates
 
 #: Universal gas constant [J/(mol K)] (CODATA 2018, exact).
@@ -583,6 +584,32 @@ class GasMixture(Medium):
         return FluidStates(
             p, h, T, rho, u, s, cp, nan, d_p, d_h, np.zeros(sh, dtype=np.int8), ok.reshape(sh)
         )
+
+    def transport(self, p, h, *, check: bool = True) -> dict:
+        """Viscosity, conductivity, cp and Pr at (p [Pa], h [J/kg]) (see
+        :meth:`Medium.transport`): T(p, h) of this medium, then the dilute-gas species
+        values mixed by Wilke's rule (viscosity) and Wassiljewa/Mason-Saxena
+        (conductivity), :mod:`dnasim.media.gas_transport`; cp(T) of this medium's
+        NASA polynomials. Independent of p (dilute gas). A state outside 200..6000 K
+        raises :class:`PropertyError` (or gets NaN with ``check=False``)."""
+        p, h = _as_arrays(p, h)
+        T, _, ok = self._T_arrays(p, h, False)
+        model = getattr(self, "_transport_model", None)
+        if model is None:
+            model = self._transport_model = MixtureTransport(self.mole_fractions)
+        Tf = np.where(ok, T, T_REF).ravel()
+        mu, k = model(Tf)
+        cp = self.cp_T(Tf)
+        pf, hf = p.ravel(), h.ravel()
+
+        def reason(i):
+            if not (0.0 < pf[i] < math.inf):
+                return "pressure must be finite and > 0"
+            if not math.isfinite(hf[i]):
+                return "enthalpy must be finite"
+            return self._range_reason(float(hf[i]))
+
+        return transport_result(self.label, p, h, mu, k, cp, ~ok.ravel(), reason, check)
 
     def _compute_h_pT(self, p: float, T: float) -> float:
         if not (T_MIN <= T <= T_MAX):
