@@ -27,6 +27,7 @@ STAGES: list[tuple[str, list[str]]] = [
     ("units", ["dnasim.units"]),
     ("values", ["dnasim.values"]),
     ("media", ["dnasim.media"]),
+    ("correlations", ["dnasim.correlations"]),
     ("components", ["dnasim.components"]),
     ("plugins", ["dnasim.plugins"]),
     ("signals", ["dnasim.signals"]),

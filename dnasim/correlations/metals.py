@@ -9,7 +9,7 @@ temperature (below 300 K the room-temperature value; no boiler wall is above 100
 
 The boiler-steel names are mapped to the nearest composition row of the table:
 
-* ``P235GH``, ``P265GH``, ``SA-210``, ``carbon steel`` -> "carbon-silicon steel
+* ``P235GH``, ``SA-210``, ``carbon steel`` -> "carbon-silicon steel
   (Mn <= 1 %, 0.1 % < Si <= 0.6 %)";
 * ``16Mo3`` -> "chromium (low) steel, 1/2 Cr-1/4 Mo-Si" (a C-Mo steel: the nearest
   low-alloy row; Incropera has no C-1/2 Mo row);
@@ -83,7 +83,6 @@ _ROWS = {
 
 _NAMES = {
     "P235GH": "carbon-silicon steel (Mn <= 1 %, 0.1 % < Si <= 0.6 %)",
-    "P265GH": "carbon-silicon steel (Mn <= 1 %, 0.1 % < Si <= 0.6 %)",
     "SA-210": "carbon-silicon steel (Mn <= 1 %, 0.1 % < Si <= 0.6 %)",
     "carbon steel": "carbon-silicon steel (Mn <= 1 %, 0.1 % < Si <= 0.6 %)",
     "plain carbon steel": "plain carbon steel (Mn <= 1 %, Si <= 0.1 %)",

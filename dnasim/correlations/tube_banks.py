@@ -91,9 +91,9 @@ def annular_fin_efficiency(h, k_fin, t, r_1, r_2):
 
     (r_2c: the tip corrected for its own area.) h: gas-side coefficient [W/(m2 K)],
     k_fin [W/(m K)], t fin thickness [m], r_1 root (tube outer) radius, r_2 fin tip
-    radius [m]. Within about 1 % of the exact Bessel-function solution for
-    1 <= r_2/r_1 <= 3 and eta >= 0.5 (tests/test_correlations.py measures it); less
-    accurate at low efficiency. h -> 0 gives 1."""
+    radius [m]. Within 2 % of the exact Bessel-function solution (Incropera eq. 3.96)
+    for r_2/r_1 <= 2.4 and eta >= 0.5 (tests/test_correlations.py measures 1.5 % at
+    worst); less accurate at low efficiency. h -> 0 gives 1."""
     h = np.asarray(h, dtype=float)
     r2c = r_2 + 0.5 * t
     phi = (r2c / r_1 - 1.0) * (1.0 + 0.35 * np.log(r2c / r_1))
