@@ -183,6 +183,16 @@ def test_numpy_and_numba_kernels_agree():
         np.testing.assert_allclose(sa[key], sb[key], rtol=1e-9, err_msg=key)
 
 
+def test_isothermal_inputs_route_equals_the_compiled_one():
+    w = get_medium("Water")
+    st = w.states(np.array([1e5, 20e6, 22.1e6, 30e6]), np.array([3e5, 1.8e6, 2.0e6, 3.0e6]))
+    cv, zeta = WT.isothermal_inputs(st.T, st.rho, st.cp, st.drho_dp_h, st.drho_dh_p)
+    a = WT.mu_k(st.T, st.rho, st.cp, cv, zeta)
+    b = WT.mu_k_ph(st.T, st.rho, st.cp, st.drho_dp_h, st.drho_dh_p)
+    # the same formulas in numpy and in the compiled loop: equal to round-off
+    np.testing.assert_allclose(a[1], b[1], rtol=1e-12)
+
+
 # ----------------------------------------------------------------- the API
 
 
@@ -308,6 +318,13 @@ def test_flue_gas_transport_and_errors():
         fg.transport(1e5, fg.h_min - 1.0)
     assert e.value.prop == "transport" and "200 K" in str(e.value)
     assert np.isnan(fg.transport([1e5], [fg.h_min - 1.0], check=False)["k"]).all()
+    # a few points take the scalar path, many the array path: the same numbers
+    T = np.linspace(250.0, 3000.0, 20)
+    many = fg.transport(1e5, fg.h_T(T))
+    for i in (0, 7, 19):
+        few = fg.transport(1e5, fg.h_T(T[i]))
+        for key in ("mu", "k", "cp"):
+            assert float(few[key]) == pytest.approx(float(many[key][i]), rel=1e-13), key
 
 
 def test_ideal_gas_other_than_air_has_no_transport():

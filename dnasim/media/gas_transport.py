@@ -148,6 +148,43 @@ class MixtureTransport:
         # the parts of Phi_ij that do not depend on T: (M_j/M_i)^(1/4), [8 (1 + M_i/M_j)]^(-1/2)
         self._m14 = ((M[None, :] / M[:, None]) ** 0.25)[:, :, None]
         self._den = (1.0 / np.sqrt(8.0 * (1.0 + M[:, None] / M[None, :])))[:, :, None]
+        # plain floats for :meth:`scalar`
+        self._x_l = self.x.tolist()
+        self._m14_l = self._m14[:, :, 0].tolist()
+        self._den_l = self._den[:, :, 0].tolist()
+
+    def scalar(self, T: float) -> tuple[float, float]:
+        """(mu [Pa s], k [W/(m K)]) at one T [K]: the same formulas in plain floats
+        (faster than the array code for a few points)."""
+        lnT = math.log(T)
+        mus = []
+        ks = []
+        for s in self.species:
+            if s == "H2O":
+                Tr = T / _T_C
+                s_mu = _MU_H[0] + (_MU_H[1] + (_MU_H[2] + _MU_H[3] / Tr) / Tr) / Tr
+                s_k = _K_L[0] + (_K_L[1] + (_K_L[2] + (_K_L[3] + _K_L[4] / Tr) / Tr) / Tr) / Tr
+                r = math.sqrt(Tr)
+                mus.append(1e-4 * r / s_mu)
+                ks.append(1e-3 * r / s_k)
+                continue
+            Ts, mu_lo, mu_hi, k_lo, k_hi = CEA_FITS[s]
+            cm, ck = (mu_hi, k_hi) if T >= Ts else (mu_lo, k_lo)
+            mus.append(1e-7 * math.exp(cm[0] * lnT + cm[1] / T + cm[2] / (T * T) + cm[3]))
+            ks.append(1e-4 * math.exp(ck[0] * lnT + ck[1] / T + ck[2] / (T * T) + ck[3]))
+        n = len(mus)
+        if n == 1:
+            return mus[0], ks[0]
+        x = self._x_l
+        mu = k = 0.0
+        for i in range(n):
+            D = 0.0
+            for j in range(n):
+                phi = (1.0 + math.sqrt(mus[i] / mus[j]) * self._m14_l[i][j]) ** 2 * self._den_l[i][j]
+                D += x[j] * phi
+            mu += x[i] * mus[i] / D
+            k += x[i] * ks[i] / D
+        return mu, k
 
     def __call__(self, T):
         """(mu [Pa s], k [W/(m K)]) arrays of the shape of T [K]."""

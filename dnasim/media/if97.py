@@ -169,15 +169,17 @@ class IF97Water(Medium):
         shape = st.p.shape
         pf, hf = st.p.ravel(), st.h.ravel()
         x = st.x.ravel()
-        T, rho, cp = st.T.ravel().copy(), st.rho.ravel().copy(), st.cp.ravel().copy()
-        with np.errstate(invalid="ignore", divide="ignore"):
-            cv, zeta = WT.isothermal_inputs(T, rho, cp, st.drho_dp_h.ravel(), st.drho_dh_p.ravel())
+        T, rho, cp = st.T.ravel(), st.rho.ravel(), st.cp.ravel()
+        d_p, d_h = st.drho_dp_h.ravel(), st.drho_dh_p.ravel()
+        on_line = (x == 0.0) | (x == 1.0)
+        if on_line.any():
+            T, rho, cp, d_p, d_h = (a.copy() for a in (T, rho, cp, d_p, d_h))
+            for side, edge in ((0, x == 0.0), (1, x == 1.0)):
+                if edge.any():
+                    sat = self._saturated_sides(pf[edge])[side]
+                    T[edge], rho[edge], cp[edge], d_p[edge], d_h[edge] = sat
+        mu, k = WT.mu_k_ph(T, rho, cp, d_p, d_h)
         dome = (x > 0.0) & (x < 1.0)
-        for side, edge in ((0, x == 0.0), (1, x == 1.0)):
-            if edge.any():
-                sat = self._saturated_sides(pf[edge])[side]
-                T[edge], rho[edge], cp[edge], cv[edge], zeta[edge] = sat
-        mu, k = WT.mu_k(T, rho, cp, cv, zeta)
         bad = ~st.ok.ravel() | dome | ~(np.isfinite(mu) & np.isfinite(k))
 
         def reason(i):
@@ -210,9 +212,9 @@ class IF97Water(Medium):
                 "saturation_transport",
                 "p outside the IF97 saturation range [611.213 Pa, p_c = 22.064 MPa)",
             )
-        (TL, rL, cL, cvL, zL), (TV, rV, cV, cvV, zV) = self._saturated_sides(pf)
-        muL, kL = WT.mu_k(TL, rL, cL, cvL, zL)
-        muV, kV = WT.mu_k(TV, rV, cV, cvV, zV)
+        (TL, rL, cL, pL, hL), (TV, rV, cV, pV, hV) = self._saturated_sides(pf)
+        muL, kL = WT.mu_k_ph(TL, rL, cL, pL, hL)
+        muV, kV = WT.mu_k_ph(TV, rV, cV, pV, hV)
         hl, hv = self.saturation_enthalpies(pf)
         values = (
             TL, rL, rV, hl, hv, muL, muV, kL, kV, cL, cV,
@@ -221,21 +223,26 @@ class IF97Water(Medium):
         return {key: v.reshape(p.shape) for key, v in zip(SATURATION_TRANSPORT_KEYS, values)}
 
     def _saturated_sides(self, p):
-        """((T, rho, cp, cv, (d rho/d p)_T) of the saturated liquid, the same of the
-        vapour) at 1-D p [Pa] in the saturation range: single-phase values on each side."""
+        """((T, rho, cp, (d rho/d p)_h, (d rho/d h)_p) of the saturated liquid, the same
+        of the vapour) at 1-D p [Pa] in the saturation range: single-phase values on
+        each side (the forced phase branch of the compiled kernel, or the saturated
+        records of the numpy kernel)."""
         if self.kernel == "numba":
             hl, hv = NB.saturation_arrays(p)
             out = []
             for hs, branch in ((hl, NB.LIQUID), (hv, NB.VAPOUR)):
                 r = NB.ph_arrays(p, hs, branch)
-                cv, zeta = WT.isothermal_inputs(r.T, r.rho, r.cp, r.drho_dp_h, r.drho_dh_p)
-                out.append((r.T, r.rho, r.cp, cv, zeta))
+                out.append((r.T, r.rho, r.cp, r.drho_dp_h, r.drho_dh_p))
             return tuple(out)
         Ts, _, recL, recV, _ = K._saturation(p)
         out = []
         for rec in (recL, recV):
-            v, cp, v_T, v_p = rec[0], rec[5], rec[3], rec[4]
-            out.append((Ts, 1.0 / v, cp, cp + Ts * v_T * v_T / v_p, -v_p / (v * v)))
+            # record: v, h, s, (dv/dT)_p, (dv/dp)_T, cp, (dh/dp)_T
+            v, cp = rec[0], rec[5]
+            rho = 1.0 / v
+            rho_h = -rec[3] / (v * v * cp)  # (d rho/d T)_p / cp
+            rho_p = -rec[4] / (v * v) - rho_h * rec[6]  # (d rho/d p)_T - rho_h (dh/dp)_T
+            out.append((Ts, rho, cp, rho_p, rho_h))
         return tuple(out)
 
     # ------------------------------------------------------------ h(p, T)

@@ -182,12 +182,17 @@ def _lambda2(Tr, dr, mu_r, cp, cv, drho_dp_T):
 
 
 @_njit
-def _kernel(T, rho, cp, cv, drho_dp_T, mu, k):
-    """Fill mu [Pa s] and k [W/(m K)] from T [K], rho [kg/m3] and, for lambda2,
-    cp, cv [J/(kg K)] and (d rho/d p)_T [kg/(m3 Pa)] (NaN: no enhancement)."""
+def _kernel(T, rho, cp, a, b, mode, mu, k):
+    """Fill mu [Pa s] and k [W/(m K)] from T [K], rho [kg/m3] (1-D arrays).
+
+    mode 0: no critical enhancement (a, b, cp unused); mode 1: a = cv [J/(kg K)],
+    b = (d rho/d p)_T [kg/(m3 Pa)]; mode 2: a = (d rho/d p)_h, b = (d rho/d h)_p of a
+    (p, h) state, converted as :func:`isothermal_inputs` says."""
     for n in range(T.size):
-        Tr = T[n] / T_C
-        dr = rho[n] / RHO_C
+        Tn = T[n]
+        rn = rho[n]
+        Tr = Tn / T_C
+        dr = rn / RHO_C
         if not (Tr > 0.0 and dr >= 0.0 and math.isfinite(Tr) and math.isfinite(dr)):
             mu[n] = math.nan
             k[n] = math.nan
@@ -197,7 +202,14 @@ def _kernel(T, rho, cp, cv, drho_dp_T, mu, k):
         for i in range(K_L0.size - 2, -1, -1):
             s = s / Tr + K_L0[i]
         lam = math.sqrt(Tr) / s * math.exp(dr * _poly2(1.0 / Tr - 1.0, dr - 1.0, K_L1))
-        lam += _lambda2(Tr, dr, mu_r, cp[n], cv[n], drho_dp_T[n])
+        if mode == 1:
+            lam += _lambda2(Tr, dr, mu_r, cp[n], a[n], b[n])
+        elif mode == 2:
+            c = cp[n]
+            rho_T = c * b[n]
+            rho_pT = a[n] + b[n] * (1.0 / rn + Tn * rho_T / (rn * rn))
+            cv = c - Tn * rho_T * rho_T / (rn * rn * rho_pT)
+            lam += _lambda2(Tr, dr, mu_r, c, cv, rho_pT)
         mu[n] = mu_r * 1e-6
         k[n] = lam * 1e-3
 
@@ -217,13 +229,25 @@ def mu_k(T, rho, cp=None, cv=None, drho_dp_T=None):
     """
     if cp is None:
         shape, (T, rho) = _flat(T, rho)
-        cp = cv = drho_dp_T = np.full(T.size, np.nan)
+        cp = a = b = T
+        mode = 0
     else:
-        shape, (T, rho, cp, cv, drho_dp_T) = _flat(T, rho, cp, cv, drho_dp_T)
+        shape, (T, rho, cp, a, b) = _flat(T, rho, cp, cv, drho_dp_T)
+        mode = 1
     mu = np.empty(T.size)
     k = np.empty(T.size)
-    _kernel(T, rho, cp, cv, drho_dp_T, mu, k)
+    _kernel(T, rho, cp, a, b, mode, mu, k)
     return mu.reshape(shape), k.reshape(shape)
+
+
+def mu_k_ph(T, rho, cp, drho_dp_h, drho_dh_p):
+    """(mu [Pa s], k [W/(m K)]) with the critical enhancement from a (p, h) state's
+    1-D float arrays T [K], rho [kg/m3], cp [J/(kg K)], (d rho/d p)_h [kg/(m3 Pa)],
+    (d rho/d h)_p [kg2/(m3 J)] (:func:`isothermal_inputs` done in the compiled loop)."""
+    mu = np.empty(T.size)
+    k = np.empty(T.size)
+    _kernel(T, rho, cp, drho_dp_h, drho_dh_p, 2, mu, k)
+    return mu, k
 
 
 def viscosity(T, rho):
