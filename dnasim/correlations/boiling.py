@@ -80,5 +80,5 @@ def chen_boiling(G, x, D, rho_l, rho_v, mu_l, mu_v, k_l, cp_l, h_lv, sigma, dT_s
         h_vap = np.nan
     else:
         h_vap = nusselt_dittus_boelter(G * D / mu_v, mu_v * cp_v / k_v) * k_v / D
-    w = np.clip((x - xc) / (1.0 - xc), 0.0, 1.0)
+    w = np.clip((x - xc) / np.maximum(1.0 - xc, 1e-12), 0.0, 1.0)
     return np.where(x > xc, (1.0 - w) * h_wet + w * h_vap, h_wet)
