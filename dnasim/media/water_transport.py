@@ -13,9 +13,8 @@ Formulations
   with Tr = T / 647.096 K, rho_r = rho / 322 kg/m3. **mu2 = 1**: the critical
   enhancement is left out, as the release recommends for industrial use (IAPWS: "the
   near-critical term is negligible except very close to the critical point; it should
-  be omitted for industrial use"). Without it mu is low by more than 2 % only in a
-  small neighbourhood of the critical point (within about 1 K and 25 % in density
-  of T_c, rho_c), where no boiler operates for long.
+  be omitted for industrial use"). Without it mu is too low only in a small
+  neighbourhood of the critical point, where no boiler operates for long.
 
 * **Thermal conductivity**: IAPWS R15-11, "Release on the IAPWS Formulation 2011 for
   the Thermal Conductivity of Ordinary Water Substance" (Huber et al., J. Phys. Chem.
