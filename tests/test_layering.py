@@ -26,7 +26,7 @@ STAGES: list[tuple[str, list[str]]] = [
     ),
     ("units", ["dnasim.units"]),
     ("values", ["dnasim.values"]),
-    ("media", ["dnasim.media"]),
+    ("media", ["dnasim.media", "dnasim.correlations"]),
     ("components", ["dnasim.components"]),
     ("plugins", ["dnasim.plugins"]),
     ("signals", ["dnasim.signals"]),

@@ -16,6 +16,8 @@
     water.h_px(p_array, x_array)                  # saturated mixture h
     st.T, st.rho, st.u, st.s, st.cp, st.quality, st.drho_dp_h, st.drho_dh_p
     water.h_pT(1e5, 350.0)                        # -> h [J/kg]
+    water.transport(p, h)                         # -> {"mu", "k", "cp", "Pr"} arrays
+    water.saturation_transport(p)                 # -> saturated mu_l, mu_v, k_l, ..., sigma
 
 Every failure to evaluate a state is a :class:`PropertyError` (a
 :class:`dnasim.errors.ResidualDomainError`) that names the fluid, p, h and the
@@ -26,7 +28,8 @@ Modules: ``state`` (FluidState, FluidStates), ``errors`` (PropertyError),
 the vectorised IAPWS-IF97 kernel, with ``if97_coefficients``), ``coolprop_medium``
 (HEOS and tabular CoolProp backends), ``ideal_gas`` (IdealGas), ``gas_mixture``
 (GasMixture: NASA-polynomial ideal-gas mixtures, flue gas), ``registry``
-(get_medium and fluid names).
+(get_medium and fluid names), ``water_transport`` (IAPWS viscosity, conductivity,
+surface tension), ``gas_transport`` (dilute gases, Wilke and Mason-Saxena mixing).
 """
 
 from dnasim.media.base import Medium

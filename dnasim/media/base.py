@@ -194,6 +194,46 @@ class Medium(ABC):
             )
         return hl + x * (hv - hl)
 
+    def transport(self, p, h, *, check: bool = True) -> dict:
+        """Transport properties at arrays of pressure ``p`` [Pa] and specific enthalpy
+        ``h`` [J/kg] (broadcast; not cached), for heat-transfer and friction correlations.
+
+        Returns a dict of float arrays of the broadcast shape:
+
+        - ``"mu"``: dynamic viscosity [Pa s];
+        - ``"k"``: thermal conductivity [W/(m K)];
+        - ``"cp"``: isobaric specific heat [J/(kg K)] (the one ``Pr`` is made with);
+        - ``"Pr"``: Prandtl number mu cp / k [-].
+
+        Single-phase states only. A state strictly inside the two-phase dome
+        (0 < x < 1) has no single viscosity or conductivity: it raises
+        :class:`PropertyError` (``check=True``) or gets NaN (``check=False``); the
+        saturated liquid and vapour values that two-phase correlations need come from
+        :meth:`saturation_transport`. A state on the saturation line (x = 0 or 1) gets
+        its saturated phase's values. States that cannot be evaluated raise (or get
+        NaN) as in :meth:`states`. Which formulation each medium uses is said in its
+        ``transport`` docstring (docs/correlations.md has the list).
+        """
+        raise PropertyError(
+            self.label, _first(p), _first(h), "transport", "no transport properties for this medium"
+        )
+
+    def saturation_transport(self, p) -> dict:
+        """Saturated liquid (``_l``) and vapour (``_v``) properties at pressures ``p``
+        [Pa] for two-phase correlations: a dict of arrays of the shape of ``p`` with
+        ``"T"`` (T_sat [K]), ``"rho_l"``, ``"rho_v"`` [kg/m3], ``"h_l"``, ``"h_v"``
+        [J/kg], ``"mu_l"``, ``"mu_v"`` [Pa s], ``"k_l"``, ``"k_v"`` [W/(m K)],
+        ``"cp_l"``, ``"cp_v"`` [J/(kg K)], ``"Pr_l"``, ``"Pr_v"`` [-] and ``"sigma"``
+        (surface tension [N/m]).
+
+        Raises :class:`PropertyError` for a pressure without a saturated state (at or
+        above the critical pressure, below the triple point) and for media without a
+        two-phase region.
+        """
+        raise PropertyError(
+            self.label, _first(p), math.nan, "saturation_transport", "no two-phase region"
+        )
+
     def h_pT(self, p: float, T: float) -> float:
         """Return the specific enthalpy h [J/kg] at pressure ``p`` [Pa] and temperature ``T`` [K].
 
@@ -355,3 +395,46 @@ def _check_outputs(label: str, st: FluidState) -> None:
     q = st.quality
     if not (q == -1.0 or 0.0 <= q <= 1.0):
         raise PropertyError(label, st.p, st.h, "quality", f"backend returned quality = {q}")
+
+
+#: keys of :meth:`Medium.saturation_transport`
+SATURATION_TRANSPORT_KEYS = (
+    "T", "rho_l", "rho_v", "h_l", "h_v", "mu_l", "mu_v", "k_l", "k_v",
+    "cp_l", "cp_v", "Pr_l", "Pr_v", "sigma",
+)  # fmt: skip
+
+
+def transport_result(label, p, h, mu, k, cp, bad, reasons, check: bool) -> dict:
+    """The dict of :meth:`Medium.transport` from flat arrays (``bad``: points that
+    could not be evaluated, ``reasons``: their messages, a callable index -> str).
+
+    With ``check`` the first bad point raises :class:`PropertyError` (property
+    "transport"); otherwise bad points get NaN. Arrays are reshaped to ``p.shape``.
+    """
+    if bad.any():
+        if check:
+            i = int(np.flatnonzero(bad)[0])
+            raise PropertyError(
+                label, float(p.flat[i]), float(h.flat[i]), "transport", reasons(i)
+            )
+        mu = np.where(bad, np.nan, mu)
+        k = np.where(bad, np.nan, k)
+        cp = np.where(bad, np.nan, cp)
+    shape = p.shape
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Pr = mu * cp / k
+    return {
+        "mu": mu.reshape(shape),
+        "k": k.reshape(shape),
+        "cp": cp.reshape(shape),
+        "Pr": Pr.reshape(shape),
+    }
+
+
+def dome_reason(x: float) -> str:
+    """Why :meth:`Medium.transport` refuses a two-phase state of quality ``x``."""
+    return (
+        f"the state is inside the two-phase dome (quality x = {x:.6g}): a mixture has no "
+        "single viscosity or conductivity; two-phase correlations take the saturated "
+        "liquid and vapour values of saturation_transport(p)"
+    )

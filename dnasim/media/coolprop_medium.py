@@ -18,7 +18,14 @@ import math
 import CoolProp.CoolProp as CP
 import numpy as np
 
-from dnasim.media.base import BACKEND_ERRORS, Medium
+from dnasim.media.base import (
+    BACKEND_ERRORS,
+    SATURATION_TRANSPORT_KEYS,
+    Medium,
+    _as_arrays,
+    dome_reason,
+    transport_result,
+)
 from dnasim.media.errors import PropertyError
 from dnasim.media.state import FluidState
 
@@ -99,6 +106,78 @@ class CoolPropMedium(Medium):
             except BACKEND_ERRORS:
                 hl.flat[i] = hv.flat[i] = np.nan
         return hl, hv
+
+    def transport(self, p, h, *, check: bool = True) -> dict:
+        """Viscosity, conductivity, cp and Pr at (p [Pa], h [J/kg]) (see
+        :meth:`Medium.transport`): CoolProp's own transport correlations for this fluid
+        (``AbstractState.viscosity()``, ``conductivity()``, ``cpmass()`` after a (p, h)
+        flash; the tabular backends interpolate them). A fluid without transport data,
+        a state CoolProp cannot evaluate, or one inside the two-phase dome raises
+        :class:`PropertyError` (or gets NaN with ``check=False``)."""
+        p, h = _as_arrays(p, h)
+        pf, hf = p.ravel(), h.ravel()
+        n = pf.size
+        mu = np.full(n, np.nan)
+        k = np.full(n, np.nan)
+        cp = np.full(n, np.nan)
+        reasons: dict[int, str] = {}
+        AS = self._AS
+        for i in range(n):
+            pi, hi = float(pf[i]), float(hf[i])
+            if not (0.0 < pi < _INF and -_INF < hi < _INF):
+                reasons[i] = "p must be finite and > 0 and h finite"
+                continue
+            try:
+                AS.update(_HP, hi, pi)
+                if AS.phase() == _TWOPHASE:
+                    q = AS.Q()
+                    if 0.0 < q < 1.0:
+                        reasons[i] = dome_reason(q)
+                        continue
+                    AS.update(_PQ, pi, q)  # on the saturation line: that phase
+                mu[i] = AS.viscosity()
+                k[i] = AS.conductivity()
+                cp[i] = AS.cpmass()
+            except BACKEND_ERRORS as exc:
+                reasons[i] = str(exc)
+                continue
+            if not (mu[i] > 0.0 and k[i] > 0.0 and cp[i] > 0.0):
+                reasons[i] = f"CoolProp returned mu = {mu[i]}, k = {k[i]}, cp = {cp[i]}"
+        bad = np.zeros(n, dtype=bool)
+        bad[list(reasons)] = True
+        return transport_result(self.label, p, h, mu, k, cp, bad, reasons.__getitem__, check)
+
+    def saturation_transport(self, p) -> dict:
+        """Saturated liquid and vapour properties at p [Pa] (see
+        :meth:`Medium.saturation_transport`), by CoolProp's (p, Q) flashes at Q = 0
+        and 1 and its transport and surface-tension correlations."""
+        if not self.condensable:
+            return super().saturation_transport(p)
+        p = np.asarray(p, dtype=float)
+        pf = p.ravel()
+        out = {key: np.full(pf.size, np.nan) for key in SATURATION_TRANSPORT_KEYS}
+        AS = self._AS
+        for i, pi in enumerate(pf):
+            try:
+                if not (0.0 < pi < self.p_critical):
+                    raise ValueError("p is not below the critical pressure")
+                for q, s in ((0.0, "_l"), (1.0, "_v")):
+                    AS.update(_PQ, float(pi), q)
+                    out["rho" + s][i] = AS.rhomass()
+                    out["h" + s][i] = AS.hmass()
+                    out["mu" + s][i] = AS.viscosity()
+                    out["k" + s][i] = AS.conductivity()
+                    out["cp" + s][i] = AS.cpmass()
+                    if q == 0.0:
+                        out["T"][i] = AS.T()
+                        out["sigma"][i] = AS.surface_tension()
+            except BACKEND_ERRORS as exc:
+                raise PropertyError(
+                    self.label, float(pi), math.nan, "saturation_transport", str(exc)
+                ) from exc
+        out["Pr_l"] = out["mu_l"] * out["cp_l"] / out["k_l"]
+        out["Pr_v"] = out["mu_v"] * out["cp_v"] / out["k_v"]
+        return {key: v.reshape(p.shape) for key, v in out.items()}
 
     def _compute_state(self, p: float, h: float) -> FluidState:
         AS = self._AS

@@ -82,8 +82,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from dnasim.errors import PlantError
-from dnasim.media.base import Medium, _as_arrays
+from dnasim.media.base import Medium, _as_arrays, transport_result
 from dnasim.media.errors import PropertyError
+from dnasim.media.gas_transport import MixtureTransport
 from dnasim.media.state import FluidState, FluidStates
 
 #: Universal gas constant [J/(mol K)] (CODATA 2018, exact).
@@ -583,6 +584,48 @@ class GasMixture(Medium):
         return FluidStates(
             p, h, T, rho, u, s, cp, nan, d_p, d_h, np.zeros(sh, dtype=np.int8), ok.reshape(sh)
         )
+
+    def transport(self, p, h, *, check: bool = True) -> dict:
+        """Viscosity, conductivity, cp and Pr at (p [Pa], h [J/kg]) (see
+        :meth:`Medium.transport`): T(p, h) of this medium, then the dilute-gas species
+        values mixed by Wilke's rule (viscosity) and Wassiljewa/Mason-Saxena
+        (conductivity), :mod:`dnasim.media.gas_transport`; cp(T) of this medium's
+        NASA polynomials. Independent of p (dilute gas). A state outside 200..6000 K
+        raises :class:`PropertyError` (or gets NaN with ``check=False``)."""
+        p, h = _as_arrays(p, h)
+        model = getattr(self, "_transport_model", None)
+        if model is None:
+            model = self._transport_model = MixtureTransport(self.mole_fractions)
+        pf, hf = p.ravel(), h.ravel()
+        if p.size <= _SMALL:  # a few points: the scalar kernels (no numpy loop)
+            n = p.size
+            mu, k, cp = np.empty(n), np.empty(n), np.empty(n)
+            ok = np.ones(n, dtype=bool)
+            for i in range(n):
+                pi, hi = float(pf[i]), float(hf[i])
+                if not (0.0 < pi < math.inf and self.h_min <= hi <= self.h_max):
+                    ok[i] = False
+                    mu[i] = k[i] = cp[i] = math.nan
+                    continue
+                T, b = self._T_scalar(pi, hi)
+                mu[i], k[i] = model.scalar(T)
+                d0, d1, d2, d3, d4 = self._cp_t[b]
+                cp[i] = d0 + T * (d1 + T * (d2 + T * (d3 + T * d4)))
+        else:
+            T, _, ok = self._T_arrays(p, h, False)
+            ok = ok.ravel()
+            Tf = np.where(ok, T.ravel(), T_REF)
+            mu, k = model(Tf)
+            cp = self.cp_T(Tf)
+
+        def reason(i):
+            if not (0.0 < pf[i] < math.inf):
+                return "pressure must be finite and > 0"
+            if not math.isfinite(hf[i]):
+                return "enthalpy must be finite"
+            return self._range_reason(float(hf[i]))
+
+        return transport_result(self.label, p, h, mu, k, cp, ~ok, reason, check)
 
     def _compute_h_pT(self, p: float, T: float) -> float:
         if not (T_MIN <= T <= T_MAX):

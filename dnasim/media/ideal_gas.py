@@ -7,8 +7,9 @@ import math
 import numpy as np
 
 from dnasim.errors import PlantError
-from dnasim.media.base import Medium, _as_arrays
+from dnasim.media.base import Medium, _as_arrays, transport_result
 from dnasim.media.errors import PropertyError
+from dnasim.media.gas_mixture import DRY_AIR, GasMixture
 from dnasim.media.state import FluidState, FluidStates
 
 _log = math.log
@@ -175,3 +176,45 @@ class IdealGas(Medium):
 
     def _compute_h_pT(self, p: float, T: float) -> float:
         return self.cp * (T - self.T_ref)
+
+    def transport(self, p, h, *, check: bool = True) -> dict:
+        """Viscosity, conductivity, cp and Pr at (p [Pa], h [J/kg]) (see
+        :meth:`Medium.transport`), for the gas named ``"Air"`` only: dry air
+        (:data:`dnasim.media.gas_mixture.DRY_AIR`: N2, O2, Ar, CO2 by mole) at this
+        medium's T = T_ref + h / cp, by :mod:`dnasim.media.gas_transport` (Wilke,
+        Wassiljewa/Mason-Saxena). ``"cp"`` (and so ``"Pr"``) is the physical cp(T) of
+        dry air from the NASA polynomials, not this medium's constant cp: a
+        heat-transfer correlation needs the real Prandtl number (0.707 at 300 K, 0.73
+        at 1000 K, where the constant cp = 1006 J/(kg K) would give 0.64). Another
+        IdealGas has no transport data: PropertyError."""
+        p, h = _as_arrays(p, h)
+        if self.name != "Air":
+            raise PropertyError(
+                self.label, float(p.flat[0]) if p.size else math.nan,
+                float(h.flat[0]) if h.size else math.nan, "transport",
+                "no transport data for this ideal gas (only 'Air' has them); use a "
+                "GasMixture or a CoolProp fluid",
+            )  # fmt: skip
+        air = getattr(self, "_air_mixture", None)
+        if air is None:
+            air = self._air_mixture = GasMixture("Air", mole_fractions=DRY_AIR)
+        T = self.T_ref + h / self.cp
+        ok = (p > 0.0) & (p < math.inf) & np.isfinite(h) & (T >= air.T_min) & (T <= air.T_max)
+        Tf = np.where(ok, T, air.T_ref).ravel()
+        ha = air.h_T(Tf)
+        out = air.transport(np.full(Tf.shape, 1e5), ha)
+        pf, hf, Tb = p.ravel(), h.ravel(), T.ravel()
+
+        def reason(i):
+            if not (0.0 < pf[i] < math.inf):
+                return "pressure must be finite and > 0"
+            if not math.isfinite(hf[i]):
+                return "enthalpy must be finite"
+            return (
+                f"T = {Tb[i]:.6g} K is outside {air.T_min:g} K..{air.T_max:g} K, the range "
+                "of the transport data"
+            )
+
+        return transport_result(
+            self.label, p, h, out["mu"], out["k"], out["cp"], ~ok.ravel(), reason, check
+        )

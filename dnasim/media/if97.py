@@ -28,7 +28,14 @@ import numpy as np
 
 from dnasim.media import if97_kernel as K
 from dnasim.media import if97_numba as NB
-from dnasim.media.base import Medium, saturation_message
+from dnasim.media import water_transport as WT
+from dnasim.media.base import (
+    SATURATION_TRANSPORT_KEYS,
+    Medium,
+    dome_reason,
+    saturation_message,
+    transport_result,
+)
 from dnasim.media.errors import PropertyError
 from dnasim.media.state import FluidState, FluidStates
 
@@ -148,6 +155,95 @@ class IF97Water(Medium):
             )
         self.n_evaluations += memo.computed
         return T, rho, u
+
+    # ---------------------------------------------------------- transport
+    def transport(self, p, h, *, check: bool = True) -> dict:
+        """Viscosity, conductivity, cp and Pr at (p [Pa], h [J/kg]) (see
+        :meth:`Medium.transport`): T, rho, cp and the derivatives from this medium's
+        IF97 states, then IAPWS R12-08 (viscosity, industrial: no critical
+        enhancement) and IAPWS R15-11 (conductivity, industrial form with its critical
+        enhancement) by :mod:`dnasim.media.water_transport`. Inside the dome:
+        :class:`PropertyError` (or NaN with ``check=False``); on the saturation line
+        the saturated phase's values."""
+        st = self.states(p, h, check=False)
+        shape = st.p.shape
+        pf, hf = st.p.ravel(), st.h.ravel()
+        x = st.x.ravel()
+        T, rho, cp = st.T.ravel(), st.rho.ravel(), st.cp.ravel()
+        d_p, d_h = st.drho_dp_h.ravel(), st.drho_dh_p.ravel()
+        on_line = (x == 0.0) | (x == 1.0)
+        if on_line.any():
+            T, rho, cp, d_p, d_h = (a.copy() for a in (T, rho, cp, d_p, d_h))
+            for side, edge in ((0, x == 0.0), (1, x == 1.0)):
+                if edge.any():
+                    sat = self._saturated_sides(pf[edge])[side]
+                    T[edge], rho[edge], cp[edge], d_p[edge], d_h[edge] = sat
+        mu, k = WT.mu_k_ph(T, rho, cp, d_p, d_h)
+        dome = (x > 0.0) & (x < 1.0)
+        bad = ~st.ok.ravel() | dome | ~(np.isfinite(mu) & np.isfinite(k))
+
+        def reason(i):
+            if dome[i]:
+                return dome_reason(float(x[i]))
+            try:
+                self.state(float(pf[i]), float(hf[i]))
+            except PropertyError as exc:
+                return exc.reason
+            return "the transport correlations returned NaN"  # pragma: no cover
+
+        return transport_result(
+            self.label, pf.reshape(shape), hf.reshape(shape), mu, k, cp, bad, reason, check
+        )
+
+    def saturation_transport(self, p) -> dict:
+        """Saturated liquid and vapour properties at p [Pa] (see
+        :meth:`Medium.saturation_transport`): IF97 saturated states, IAPWS R12-08 and
+        R15-11 as in :meth:`transport`, surface tension by IAPWS R1-76(2014).
+        PropertyError outside [611.213 Pa, p_c)."""
+        p = np.asarray(p, dtype=float)
+        pf = p.ravel()
+        bad = ~((pf >= P_SAT_MIN) & (pf < P_CRIT))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise PropertyError(
+                self.label,
+                float(pf[i]),
+                math.nan,
+                "saturation_transport",
+                "p outside the IF97 saturation range [611.213 Pa, p_c = 22.064 MPa)",
+            )
+        (TL, rL, cL, pL, hL), (TV, rV, cV, pV, hV) = self._saturated_sides(pf)
+        muL, kL = WT.mu_k_ph(TL, rL, cL, pL, hL)
+        muV, kV = WT.mu_k_ph(TV, rV, cV, pV, hV)
+        hl, hv = self.saturation_enthalpies(pf)
+        values = (
+            TL, rL, rV, hl, hv, muL, muV, kL, kV, cL, cV,
+            muL * cL / kL, muV * cV / kV, WT.surface_tension(TL),
+        )  # fmt: skip
+        return {key: v.reshape(p.shape) for key, v in zip(SATURATION_TRANSPORT_KEYS, values)}
+
+    def _saturated_sides(self, p):
+        """((T, rho, cp, (d rho/d p)_h, (d rho/d h)_p) of the saturated liquid, the same
+        of the vapour) at 1-D p [Pa] in the saturation range: single-phase values on
+        each side (the forced phase branch of the compiled kernel, or the saturated
+        records of the numpy kernel)."""
+        if self.kernel == "numba":
+            hl, hv = NB.saturation_arrays(p)
+            out = []
+            for hs, branch in ((hl, NB.LIQUID), (hv, NB.VAPOUR)):
+                r = NB.ph_arrays(p, hs, branch)
+                out.append((r.T, r.rho, r.cp, r.drho_dp_h, r.drho_dh_p))
+            return tuple(out)
+        Ts, _, recL, recV, _ = K._saturation(p)
+        out = []
+        for rec in (recL, recV):
+            # record: v, h, s, (dv/dT)_p, (dv/dp)_T, cp, (dh/dp)_T
+            v, cp = rec[0], rec[5]
+            rho = 1.0 / v
+            rho_h = -rec[3] / (v * v * cp)  # (d rho/d T)_p / cp
+            rho_p = -rec[4] / (v * v) - rho_h * rec[6]  # (d rho/d p)_T - rho_h (dh/dp)_T
+            out.append((Ts, rho, cp, rho_p, rho_h))
+        return tuple(out)
 
     # ------------------------------------------------------------ h(p, T)
     def _compute_h_pT(self, p: float, T: float) -> float:
