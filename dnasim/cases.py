@@ -297,7 +297,7 @@ def check_cases(spec, cases) -> None:
                 continue  # time functions and type errors: the case reports them
             unit = case_units(spec, [key])[key]
             try:
-                convert_quantity(value, unit, is_difference(cls, p))
+                convert_quantity(value, unit, is_difference(cls, p), atmosphere=spec.atmosphere)
             except UnitError as exc:
                 raise CaseError(f"{key} = {value!r}: {exc}") from None
 
@@ -325,7 +325,16 @@ def apply_case(spec, case: dict[str, Any]):
             continue
         cname, _, pname = key.partition(".")
         c, cls, p = _parameter(new, key)
-        x = _param_value(value, p, errors, ("components", cname), pname, _signal_units(new, c), cls)
+        x = _param_value(
+            value,
+            p,
+            errors,
+            ("components", cname),
+            pname,
+            _signal_units(new, c),
+            cls,
+            atmosphere=new.atmosphere,
+        )
         c.params[pname] = x
         c.instance = None  # built again from the new parameters
     errors.raise_if_any()

@@ -397,11 +397,18 @@ def _run(
 
     show_progress = not quiet and sys.stdout.isatty()
     try:
+        system = None
+        if patterns:  # checked against the plant's outputs before anything runs
+            from dnasim.compiler import compile as compile_plant
+
+            system = compile_plant(loaded.plant)
+            _check_var_patterns(system, patterns, plant_file)
         outcome: RunOutcome = run_plant(
             loaded,
             out,
             progress=show_progress,
             interrupt_types=(KeyboardInterrupt, _Terminate),
+            system=system,
         )
     except click.ClickException:
         raise
@@ -446,6 +453,37 @@ def _run(
         raise InputError(outcome.failure_message())
     if not outcome.success:
         raise SimulationFailed(outcome.failure_message())
+
+
+def _check_var_patterns(system, patterns, plant_file) -> None:
+    """``--vars``: raise ``InputError`` (exit 2) naming each pattern that matches none
+    of the plant's plotted outputs, with the closest names."""
+    import difflib
+
+    from dnasim.output import select_variables
+    from dnasim.plots import NOT_PLOTTED
+
+    names = [n for n in system.output_names() if n not in NOT_PLOTTED]
+    bad = [p for p in patterns if not select_variables(names, [p])]
+    if not bad:
+        return
+    parts = []
+    for p in bad:
+        stem = p.rstrip("*?[]")
+        close = difflib.get_close_matches(p, names, n=4, cutoff=0.6)
+        close += [n for n in names if stem and n.startswith(stem) and n not in close][:4]
+        hint = f"; did you mean {', '.join(repr(c) for c in close[:4])}?" if close else ""
+        parts.append(f"{p!r} matches no output of the plant{hint}")
+    components = sorted({n.split(".")[0] for n in names})
+    text = "; ".join(parts)
+    raise InputError(
+        f"{plant_file}: option --vars: {text}{'' if text.endswith('?') else '.'} A pattern is "
+        "an output name ('pipe.T_out'), a component ('pipe') or a shell pattern ('pipe.*', "
+        "'*.T_out'); the components with outputs are "
+        + ", ".join(components[:30])
+        + (" ..." if len(components) > 30 else "")
+        + ". Nothing was simulated."
+    )
 
 
 def _freeze_setup_objects() -> None:

@@ -41,7 +41,7 @@ from typing import Any
 
 from dnasim.errors import PlantError, Problems
 from dnasim.spec import ComponentSpec, PlantSpec, SimulationSettings, build_plant
-from dnasim.units import UnitError, parse_unit
+from dnasim.units import STANDARD_ATMOSPHERE, UnitError, parse_quantity, parse_unit
 from dnasim.values import (
     LIMITS,
     TIME_FUNCTION_TYPES,
@@ -499,7 +499,7 @@ def _measured_first(inputs: dict) -> list:
     return [inputs[k] for k in keys]
 
 
-def _spec_builder(comps: dict, registry, errors: Problems):
+def _spec_builder(comps: dict, registry, errors: Problems, atmosphere: float | None = None):
     """``spec_of(name)``: the ComponentSpec of component ``name`` (None when invalid),
     built once. A component whose parameters are in the unit of its measured signal
     (a controller's Kp, set point) needs that unit first: a signal output's unit
@@ -565,7 +565,7 @@ def _spec_builder(comps: dict, registry, errors: Problems):
                 u if u is not None else ref_unit(r, (cname,))
                 for u, r in zip(units, refs, strict=False)
             ]
-        built[cname] = _component(cname, table, registry, errors, tuple(units))
+        built[cname] = _component(cname, table, registry, errors, tuple(units), atmosphere)
         building.discard(cname)
         return built[cname]
 
@@ -573,7 +573,7 @@ def _spec_builder(comps: dict, registry, errors: Problems):
 
 
 def _component(
-    name, table_data, registry, errors: Problems, signal_units=()
+    name, table_data, registry, errors: Problems, signal_units=(), atmosphere=None
 ) -> ComponentSpec | None:
     table = ("components", name)
     if not _NAME_OK.match(name):
@@ -648,7 +648,9 @@ def _component(
             # reported by the network check; unit errors here would only follow from it
             unchecked = True
             continue
-        spec.params[key] = param_value(value, p, errors, table, key, signal_units, cls)
+        spec.params[key] = param_value(
+            value, p, errors, table, key, signal_units, cls, atmosphere=atmosphere
+        )
         if key == "medium" and isinstance(spec.params[key], str):
             _check_medium(spec.params[key], errors, table, key)
     for pname, p in params.items():
@@ -945,6 +947,38 @@ def _plugin_imports(v, path, errors) -> list[str]:
         return []
 
 
+#: the range of a site's atmospheric pressure [Pa] that ``[plant] atmosphere`` accepts:
+#: 0.2 bar (above the highest mountains) to 1.2 bar (below the deepest mines)
+ATMOSPHERE_RANGE = (2e4, 1.2e5)
+
+
+def _atmosphere(v, errors: Problems) -> float:
+    """``[plant] atmosphere = "0.95 bar"``: the site's ambient pressure [Pa], the zero
+    of the gauge units ("5 barg", "70 psig"); the standard atmosphere when invalid."""
+    x = quantity(v, "Pa", errors, ("plant",), "atmosphere")
+    if x is None:
+        return STANDARD_ATMOSPHERE
+    if isinstance(v, str) and parse_quantity(v)[1].gauge:
+        errors.add(
+            ("plant",),
+            "atmosphere",
+            f"the atmosphere is an absolute pressure, the zero of the gauge units; write it in "
+            f'an absolute unit, e.g. atmosphere = "1.013 bar", not {v!r}',
+        )
+        return STANDARD_ATMOSPHERE
+    lo, hi = ATMOSPHERE_RANGE
+    if not lo <= x <= hi:
+        errors.add(
+            ("plant",),
+            "atmosphere",
+            f"the atmosphere is the site's absolute ambient pressure, between {lo / 1e5:g} and "
+            f"{hi / 1e5:g} bar (got {x:g} Pa); write it with a unit, e.g. "
+            f'atmosphere = "1.013 bar" or "14.7 psi"',
+        )
+        return STANDARD_ATMOSPHERE
+    return x
+
+
 def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> PlantSpec:
     """Validate decoded TOML; every problem becomes part of one ``PlantError``."""
     errors = Problems(str(path), _LineIndex(text) if text is not None else None)
@@ -963,6 +997,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
     description = ""
     medium = None
     imports: list[str] = []
+    atmosphere = STANDARD_ATMOSPHERE
     meta = data.get("plant", {})
     if not isinstance(meta, dict):
         errors.add((), "plant", f"expected a table [plant], got {type_name(meta)}")
@@ -978,12 +1013,14 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
                 _check_medium(medium, errors, ("plant",), k)
         elif k == "import":
             imports = _plugin_imports(v, path, errors)
+        elif k == "atmosphere":
+            atmosphere = _atmosphere(v, errors)
         else:
             errors.add(
                 ("plant",),
                 k,
-                "unknown key; [plant] has name, description, medium and import"
-                + suggest(k, ("name", "description", "medium", "import")),
+                "unknown key; [plant] has name, description, medium, atmosphere and import"
+                + suggest(k, ("name", "description", "medium", "atmosphere", "import")),
             )
     sim = _simulation(data, errors)
     comps = data.get("components")
@@ -1007,7 +1044,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
                 limit_message("the number of components", len(comps), LIMITS["components"]),
             )
             errors.raise_if_any()
-        spec_of = _spec_builder(comps, registry, errors)
+        spec_of = _spec_builder(comps, registry, errors, atmosphere)
         broken = {}
         for cname, ctable in comps.items():
             spec = spec_of(cname)
@@ -1039,6 +1076,7 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
         components=specs,
         medium=medium,
         imports=imports,
+        atmosphere=atmosphere,
     )
 
 

@@ -219,6 +219,7 @@ def run_plant(
     flush_rows: int = 200,
     flush_seconds: float = 1.0,
     keep_rows: bool = False,
+    system=None,
 ) -> RunOutcome:
     """Simulate ``loaded`` (a ``dnasim.plantfile.LoadedPlant``), streaming into ``out_dir``.
 
@@ -226,7 +227,9 @@ def run_plant(
     whatever is in ``out_dir`` afterwards belongs to this run. Rows go to
     ``results.csv`` as they are computed and are not kept in memory; with
     ``keep_rows=True`` the solver's result (``outcome.result``, a ``DAEResult``)
-    also holds them (t, y, yp) and its dense output.
+    also holds them (t, y, yp) and its dense output. ``system``: the compiled
+    ``loaded.plant`` when the caller has compiled it already (the command line, to
+    check ``--vars`` against the outputs before the run); else it is compiled here.
 
     Returns a :class:`RunOutcome`; failures of the simulation (``DAEError``),
     interrupts and a result file that cannot be written (status "output-error":
@@ -247,7 +250,8 @@ def run_plant(
     from dnasim.compiler import compile as compile_plant
 
     sim = loaded.simulation
-    system = compile_plant(loaded.plant)
+    if system is None:
+        system = compile_plant(loaded.plant)
     t_start = time.perf_counter()
 
     state: dict[str, Any] = {

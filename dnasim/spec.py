@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from dnasim.errors import PlantError, Problems
+from dnasim.units import STANDARD_ATMOSPHERE
 from dnasim.values import LIMITS, limit_message
 
 __all__ = [
@@ -141,6 +142,9 @@ class PlantSpec:
     path: str = "<python>"
     #: modules named by the plant file's ``[plant] import`` (component plugins)
     imports: list[str] = field(default_factory=list)
+    #: the site's ambient pressure [Pa] (``[plant] atmosphere``): the zero of the gauge
+    #: units ("5 barg", "70 psig") in the parameters and in sweep cases
+    atmosphere: float = STANDARD_ATMOSPHERE
 
     def build(self):
         """The ``Plant`` (raises ``PlantError`` naming every problem)."""
@@ -153,9 +157,16 @@ def build_plant(spec: PlantSpec):
 
     errors = Problems(spec.path, None)
     plant = Plant(spec.name, medium=spec.medium) if spec.medium else Plant(spec.name)
+    # gauge pressures given as strings ("5 barg") are read against the plant's atmosphere
+    # (a plant file's values are SI already); the standard one is every component's default
+    site = {} if spec.atmosphere == STANDARD_ATMOSPHERE else {"atmosphere": spec.atmosphere}
     for c in spec.components:
         try:
-            comp = c.instance if c.instance is not None else c.component_class()(c.name, **c.params)
+            comp = (
+                c.instance
+                if c.instance is not None
+                else c.component_class()(c.name, **site, **c.params)
+            )
         except PlantError as exc:
             errors.add(("components", c.name), None, str(exc))
             continue

@@ -292,15 +292,16 @@ def _bar(n: int):
 # --------------------------------------------------------------------------- collecting
 
 
-def _si_value(value, unit: str):
-    """A case value in SI (float) when it is a number or a quantity; else its text."""
+def _si_value(value, unit: str, atmosphere: float | None = None):
+    """A case value in SI (float) when it is a number or a quantity; else its text.
+    Gauge pressures ("5 barg") against ``atmosphere`` [Pa] (the plant's)."""
     from dnasim.units import UnitError, convert_quantity
 
     if isinstance(value, bool) or isinstance(value, dict | list):
         return json.dumps(value) if not isinstance(value, bool) else str(value).lower()
     if unit:
         try:
-            return float(convert_quantity(value, unit))
+            return float(convert_quantity(value, unit, atmosphere=atmosphere))
         except (UnitError, TypeError, ValueError):
             pass
     return str(value)
@@ -372,7 +373,7 @@ def collect(spec, cases, out_dir, *, output_interval=None):
         row = {"case": i}
         for k in keys:
             row[column_header(k, punits[k]) if punits[k] else k] = (
-                _si_value(case[k], punits[k]) if k in case else None
+                _si_value(case[k], punits[k], spec.atmosphere) if k in case else None
             )
         row["status"] = rec.get("status")
         row["message"] = rec.get("message", "")
@@ -401,7 +402,7 @@ def collect(spec, cases, out_dir, *, output_interval=None):
         "time": xr.Variable(("time",), grid, attrs={"units": "s"}),
     }
     for k in keys:
-        vals = [_si_value(c[k], punits[k]) if k in c else None for c in cases]
+        vals = [_si_value(c[k], punits[k], spec.atmosphere) if k in c else None for c in cases]
         # a parameter that is also an output (pi.setpoint): the coordinate says so
         cname = f"{k} (parameter)" if k in units else k
         if all(isinstance(v, float) for v in vals):

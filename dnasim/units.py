@@ -7,7 +7,8 @@ Measured on the project's venv (Python 3.11, 2 cores): ``import pint`` costs
 0.14-0.26 s, so about 0.4-0.5 s before the first conversion; ``import click``
 costs 0.02 s. pint is also not among the project's dependencies. Plant files need
 a few dozen engineering units, so this module keeps an explicit table (about
-2 ms to import) and is tested unit by unit in ``tests/test_units.py``.
+2 ms to import) and is tested unit by unit in ``tests/test_units.py``; pint is a
+test dependency only, the reference the table is checked against.
 
 Grammar of a unit expression
 ----------------------------
@@ -19,10 +20,28 @@ Grammar of a unit expression
 - quotients with ``/`` (left to right: "J/kg/K" is J/(kg.K)); parentheses group;
 - "1", "-" or an empty string for a dimensionless number, "%" for 1/100.
 
-Temperatures: "degC" and "degF" standing alone are absolute temperatures and are
+A value is one number and one unit, the space between them optional ("20min" is
+"20 min", everywhere: plant files, command-line options, sweep cases, the Python
+API). A sum ("1 h 30 min", "1h30min", "5 ft 2 in") or a clock time ("1:30") is
+refused, with the value in one unit in the message.
+
+Affine units: "degC" and "degF" standing alone are absolute temperatures and are
 converted with their offset ("540 degC" is 813.15 K). Inside a compound unit
 ("W/(m2.degC)", "J/(kg.degC)") they mean a temperature *difference*, like pint's
-``delta_degC``; write a difference on its own as "K" or "delta_degC".
+``delta_degC``; write a difference on its own as "K" or "delta_degC". The gauge
+pressures "barg", "mbarg", "kPag", "MPag" and "psig" are affine in the same way:
+their zero is the atmosphere, ``STANDARD_ATMOSPHERE`` (101325 Pa) unless a plant
+states its site's (``[plant] atmosphere``; the conversions take ``atmosphere``).
+"5 barg" is 601325 Pa; inside a compound ("1/barg") a gauge unit is a difference;
+a parameter that is a difference ("delta_Pa") refuses "2 barg" and asks for "2 bar".
+
+Names that mean different amounts to different readers are refused with the
+choices ("ton": short, long or metric; "MBTU": a thousand or a million; "scfm",
+"Nm3": reference conditions). The imperial units are the international ones
+(1959 yard and pound), the BTU and "cal_IT" the International Table's, "cal" the
+thermochemical calorie (4.184 J), "gal" and "gpm" the US gallon, the manometer
+units conventional (water 1000 kg/m3, mercury 13595.1 kg/m3, g = 9.80665 m/s2);
+``tests/test_units_pint.py`` checks every factor and offset against pint's.
 """
 
 from __future__ import annotations
@@ -36,6 +55,7 @@ from dnasim.errors import DnasimError
 
 __all__ = [
     "Unit",
+    "STANDARD_ATMOSPHERE",
     "UnitError",
     "parse_unit",
     "parse_quantity",
@@ -73,6 +93,22 @@ _ENERGY = _d(1, 2, -2)
 _POWER = _d(1, 2, -3)
 _FORCE = _d(1, 1, -2)
 
+#: the standard atmosphere [Pa] (ISO 2533, CGPM 1954): the default zero of the gauge
+#: units ("barg", "psig"); a plant file sets its site's with ``[plant] atmosphere``
+STANDARD_ATMOSPHERE = 101325.0
+
+#: the international foot and pound (1959) and the International Table calorie and
+#: BTU: lengths, masses and energies of the imperial units below are exact multiples
+_FT = 0.3048
+_IN = 0.0254
+_LB = 0.45359237
+_GAL = 231.0 * _IN**3  # US liquid gallon, 3.785411784 L
+_G0 = 9.80665  # standard gravity [m/s2]: kgf, at, mmH2O, psi (lbf)
+_LBF = _LB * _G0
+_PSI = _LBF / _IN**2
+_BTU = 1055.05585262  # BTU (IT) = 1 lb x 1 degF at 4.1868 J/(g.K) exactly
+_HP = 550.0 * _FT * _LBF  # mechanical horsepower, 550 ft.lbf/s
+
 # name -> (dims, scale, offset, prefixable)
 _TABLE: dict[str, tuple[Dims, float, float, bool]] = {
     # dimensionless
@@ -87,20 +123,44 @@ _TABLE: dict[str, tuple[Dims, float, float, bool]] = {
     "g": (_M, 1e-3, 0.0, True),
     "t": (_M, 1e3, 0.0, False),
     "tonne": (_M, 1e3, 0.0, False),
-    "lb": (_M, 0.45359237, 0.0, False),
+    "lb": (_M, _LB, 0.0, False),
+    "lbm": (_M, _LB, 0.0, False),
+    "klb": (_M, 1e3 * _LB, 0.0, False),
+    "short_ton": (_M, 2000.0 * _LB, 0.0, False),
+    "long_ton": (_M, 2240.0 * _LB, 0.0, False),
     # length, area, volume
     "m": (_L, 1.0, 0.0, True),
     "L": (_d(0, 3), 1e-3, 0.0, True),
     "l": (_d(0, 3), 1e-3, 0.0, True),
-    "ft": (_L, 0.3048, 0.0, False),
+    "ft": (_L, _FT, 0.0, False),
+    "in": (_L, _IN, 0.0, False),
+    "inch": (_L, _IN, 0.0, False),
+    "yd": (_L, 3.0 * _FT, 0.0, False),
+    "gal": (_d(0, 3), _GAL, 0.0, False),  # US liquid gallon
+    "impgal": (_d(0, 3), 4.54609e-3, 0.0, False),  # imperial gallon
+    "gpm": (_d(0, 3, -1), _GAL / 60.0, 0.0, False),  # US gal/min
+    "cfm": (_d(0, 3, -1), _FT**3 / 60.0, 0.0, False),  # ft3/min at the actual state
+    "acfm": (_d(0, 3, -1), _FT**3 / 60.0, 0.0, False),
     # time
     "s": (_T, 1.0, 0.0, True),
+    "sec": (_T, 1.0, 0.0, False),
+    "second": (_T, 1.0, 0.0, False),
+    "seconds": (_T, 1.0, 0.0, False),
     "min": (_T, 60.0, 0.0, False),
+    "mins": (_T, 60.0, 0.0, False),
+    "minute": (_T, 60.0, 0.0, False),
+    "minutes": (_T, 60.0, 0.0, False),
     "h": (_T, 3600.0, 0.0, False),
     "hr": (_T, 3600.0, 0.0, False),
+    "hrs": (_T, 3600.0, 0.0, False),
+    "hour": (_T, 3600.0, 0.0, False),
+    "hours": (_T, 3600.0, 0.0, False),
     "d": (_T, 86400.0, 0.0, False),
     "day": (_T, 86400.0, 0.0, False),
+    "days": (_T, 86400.0, 0.0, False),
     "Hz": (_d(t=-1), 1.0, 0.0, True),
+    # an angular velocity [rad/s] (the radian is dimensionless): 1 rpm = 2 pi/60 1/s
+    "rpm": (_d(t=-1), 2.0 * math.pi / 60.0, 0.0, False),
     # temperature (absolute when alone; a difference inside a compound unit)
     "K": (_TH, 1.0, 0.0, False),
     "degC": (_TH, 1.0, 273.15, False),
@@ -119,15 +179,89 @@ _TABLE: dict[str, tuple[Dims, float, float, bool]] = {
     "bar": (_PRESSURE, 1e5, 0.0, True),
     "bara": (_PRESSURE, 1e5, 0.0, False),
     "atm": (_PRESSURE, 101325.0, 0.0, False),
-    "psi": (_PRESSURE, 6894.757293168361, 0.0, False),
+    "at": (_PRESSURE, _G0 * 1e4, 0.0, False),  # technical atmosphere, 1 kgf/cm2
+    "psi": (_PRESSURE, _PSI, 0.0, False),
+    "psia": (_PRESSURE, _PSI, 0.0, False),
+    "ksi": (_PRESSURE, 1e3 * _PSI, 0.0, False),
+    "Torr": (_PRESSURE, 101325.0 / 760.0, 0.0, False),
+    "torr": (_PRESSURE, 101325.0 / 760.0, 0.0, False),
+    # conventional manometer units: mercury 13595.1 kg/m3, water 1000 kg/m3, at g_0
     "mmHg": (_PRESSURE, 133.322387415, 0.0, False),
-    "mH2O": (_PRESSURE, 9806.65, 0.0, False),
+    "inHg": (_PRESSURE, 25.4 * 133.322387415, 0.0, False),
+    "mH2O": (_PRESSURE, 1e3 * _G0, 0.0, False),
+    "cmH2O": (_PRESSURE, 10.0 * _G0, 0.0, False),
+    "mmH2O": (_PRESSURE, _G0, 0.0, False),
+    "inH2O": (_PRESSURE, _IN * 1e3 * _G0, 0.0, False),
+    "ftH2O": (_PRESSURE, _FT * 1e3 * _G0, 0.0, False),
+    # gauge pressures: against the atmosphere (``_GAUGE``; the offset here is the
+    # standard atmosphere, replaced by a plant's ``[plant] atmosphere``)
+    "barg": (_PRESSURE, 1e5, STANDARD_ATMOSPHERE, False),
+    "mbarg": (_PRESSURE, 1e2, STANDARD_ATMOSPHERE, False),
+    "kPag": (_PRESSURE, 1e3, STANDARD_ATMOSPHERE, False),
+    "MPag": (_PRESSURE, 1e6, STANDARD_ATMOSPHERE, False),
+    "psig": (_PRESSURE, _PSI, STANDARD_ATMOSPHERE, False),
     # energy, power, force
     "J": (_ENERGY, 1.0, 0.0, True),
     "Wh": (_ENERGY, 3600.0, 0.0, True),
-    "cal": (_ENERGY, 4.184, 0.0, True),
+    "cal": (_ENERGY, 4.184, 0.0, True),  # thermochemical calorie (pint's "calorie")
+    "cal_IT": (_ENERGY, 4.1868, 0.0, True),  # International Table calorie
+    "BTU": (_ENERGY, _BTU, 0.0, False),
+    "Btu": (_ENERGY, _BTU, 0.0, False),
+    "kBTU": (_ENERGY, 1e3 * _BTU, 0.0, False),
+    "kBtu": (_ENERGY, 1e3 * _BTU, 0.0, False),
+    "MMBTU": (_ENERGY, 1e6 * _BTU, 0.0, False),  # MM: a million (oil and gas usage)
+    "MMBtu": (_ENERGY, 1e6 * _BTU, 0.0, False),
+    "therm": (_ENERGY, 1e5 * _BTU, 0.0, False),
     "W": (_POWER, 1.0, 0.0, True),
+    "hp": (_POWER, _HP, 0.0, False),  # mechanical horsepower
+    "PS": (_POWER, 75.0 * _G0, 0.0, False),  # metric horsepower, 75 kgf.m/s
     "N": (_FORCE, 1.0, 0.0, True),
+    "kgf": (_FORCE, _G0, 0.0, False),
+    "lbf": (_FORCE, _LBF, 0.0, False),
+}
+
+#: the gauge units: their zero is the atmosphere, not vacuum (affine like degC)
+_GAUGE = frozenset({"barg", "mbarg", "kPag", "MPag", "psig"})
+
+#: how a difference of an affine unit is written: "2 barg" as a difference is "2 bar"
+_DIFFERENCE_OF = {
+    "degC": "K' or '{n} delta_degC",
+    "°C": "K' or '{n} delta_degC",
+    "degF": "delta_degF",
+    "°F": "delta_degF",
+    "barg": "bar",
+    "mbarg": "mbar",
+    "kPag": "kPa",
+    "MPag": "MPa",
+    "psig": "psi",
+}
+
+#: names that are refused, because they mean different amounts to different readers
+_AMBIGUOUS = {
+    "ton": "'ton' is 907.18 kg (US short ton), 1016.05 kg (long ton) or 1000 kg "
+    "(metric) depending on the reader: write 't' or 'tonne' (1000 kg), 'short_ton' "
+    "(2000 lb) or 'long_ton' (2240 lb)",
+    "tons": "'tons' is ambiguous: write 't' or 'tonne' (1000 kg), 'short_ton' (2000 lb) or "
+    "'long_ton' (2240 lb)",
+    "MBTU": "'MBTU' is a thousand BTU to some readers (Roman M) and a million to others: "
+    "write 'kBTU' (1e3 BTU) or 'MMBTU' (1e6 BTU)",
+    "MBtu": "'MBtu' is a thousand BTU to some readers (Roman M) and a million to others: "
+    "write 'kBtu' (1e3 BTU) or 'MMBtu' (1e6 BTU)",
+    "Mlb": "'Mlb' is a thousand pounds in US boiler practice and a million to others: "
+    "write 'klb' (1000 lb) or the number in 'lb'",
+    "scfm": "'scfm' (standard cubic feet per minute) is an amount of gas at reference "
+    "conditions that differ between standards (60 degF or 68 degF, 14.696 psia or 14.7 psia): "
+    "give the mass flow ('kg/s', 'lb/h') or the volume flow at the actual state ('cfm', "
+    "'ft3/min')",
+    "SCFM": "'SCFM' (standard cubic feet per minute) is an amount of gas at reference "
+    "conditions that differ between standards: give the mass flow ('kg/s', 'lb/h') or the "
+    "volume flow at the actual state ('cfm', 'ft3/min')",
+    "Nm": "'Nm3' (normal cubic metres) is an amount of gas at reference conditions that "
+    "differ between standards (0 degC or 15 degC): give the mass flow ('kg/s', 't/h') or "
+    "the volume at the actual state ('m3')",
+    "Sm": "'Sm3' (standard cubic metres) is an amount of gas at reference conditions that "
+    "differ between standards: give the mass flow ('kg/s', 't/h') or the volume at the "
+    "actual state ('m3')",
 }
 
 _PREFIXES = {
@@ -181,11 +315,23 @@ _DIMENSION_NAMES: dict[Dims, str] = {
 
 @dataclass(frozen=True)
 class Unit:
-    """A parsed unit: ``value_SI = value * scale + offset``; ``dims`` over (kg, m, s, K, mol)."""
+    """A parsed unit: ``value_SI = value * scale + offset``; ``dims`` over (kg, m, s, K, mol).
+
+    ``gauge``: a gauge pressure unit ("barg", "psig"), whose zero is the atmosphere:
+    ``offset`` is then the standard atmosphere, and the conversions take the
+    ``atmosphere`` of the plant instead (:meth:`zero`)."""
 
     dims: Dims
     scale: float = 1.0
     offset: float = 0.0
+    gauge: bool = False
+
+    def zero(self, atmosphere: float | None = None) -> float:
+        """The offset [SI] of this unit: the atmosphere [Pa] for a gauge unit
+        (``None``: :data:`STANDARD_ATMOSPHERE`), else ``offset``."""
+        if self.gauge and atmosphere is not None:
+            return float(atmosphere)
+        return self.offset
 
     def __mul__(self, other: Unit) -> Unit:
         return Unit(
@@ -235,27 +381,56 @@ def known_units() -> list[str]:
     return sorted(_TABLE)
 
 
-_NAME_RE = re.compile(r"mH2O|(?:delta_)?[A-Za-z°µμ%]+|1|-(?![0-9])")
+_NAME_RE = re.compile(r"[A-Za-z]+[Hh]2[Oo]|[A-Za-z°µμ%]+(?:_[A-Za-z]+)*|1|-(?![0-9])")
 _EXP_RE = re.compile(r"(?:\^|\*\*)?([+-]?[0-9]+(?:\.[0-9]+)?|\([+-]?[0-9]+/[0-9]+\))")
+
+
+#: prefixed forms offered as suggestions for a misspelt unit (with the table's names)
+_COMMON_PREFIXED = (
+    "kPa", "MPa", "hPa", "mbar", "kJ", "MJ", "GJ", "kW", "MW", "GW", "kWh", "MWh",
+    "mm", "cm", "km", "g", "mg", "ms", "kN", "kmol", "kcal", "kcal_IT", "mL", "kHz",
+)  # fmt: skip
+
+
+def _close_units(name: str) -> list[str]:
+    """Up to three known unit names close to ``name`` ("barr" -> bar, bara, barg),
+    a case-insensitive match first ("KPA" -> kPa)."""
+    import difflib
+
+    choices = list(dict.fromkeys([*_TABLE, *_COMMON_PREFIXED]))
+    low = [c for c in choices if c.lower() == name.lower()]
+    close = difflib.get_close_matches(name, choices, n=3, cutoff=0.6)
+    lower = {c.lower(): c for c in choices}
+    close += [lower[c] for c in difflib.get_close_matches(name.lower(), list(lower), n=3)]
+    return list(dict.fromkeys(low + close))[:3]
 
 
 def _lookup(name: str, text: str) -> Unit:
     entry = _TABLE.get(name)
     if entry is not None:
         dims, scale, offset, _ = entry
-        return Unit(dims, scale, offset)
+        return Unit(dims, scale, offset, name in _GAUGE)
     for prefix, factor in sorted(_PREFIXES.items(), key=lambda kv: -len(kv[0])):
         if name.startswith(prefix) and len(name) > len(prefix):
             base = _TABLE.get(name[len(prefix) :])
             if base is not None and base[3]:
                 return Unit(base[0], base[1] * factor, 0.0)
+    where = "" if text.strip() == name else f" in {text!r}"
+    if name in _AMBIGUOUS and (name not in ("Nm", "Sm") or re.search(name + r"\^?3", text)):
+        raise UnitError(f"unit {name!r}{where} is not accepted: {_AMBIGUOUS[name]}")
+    close = _close_units(name)
     hint = ""
-    import difflib
-
-    close = difflib.get_close_matches(name, list(_TABLE), n=1)
     if close:
-        hint = f"; did you mean {close[0]!r}?"
-    raise UnitError(f"unknown unit {name!r} in {text!r}{hint}")
+        names = [repr(c) for c in close]
+        hint = (
+            "; did you mean "
+            + (names[0] if len(names) == 1 else ", ".join(names[:-1]) + " or " + names[-1])
+            + "?"
+        )
+    raise UnitError(
+        f"unknown unit {name!r}{where}{hint} (the units are listed in docs/plant_files.md, "
+        "'Values and units')"
+    )
 
 
 #: limits of the grammar: exponents up to this magnitude, parentheses this deep,
@@ -295,9 +470,10 @@ class _Parser:
             raise self.error("its size is out of the range of floating-point numbers")
         if self.i != len(self.s):
             raise self.error(f"unexpected {self.s[self.i :]!r}")
-        if self.offset_atoms:
-            if self.n_atoms == 1 and u.dims == _TH and u.scale == self.offset_atoms[0].scale:
-                return self.offset_atoms[0]
+        if self.offset_atoms:  # "degC", "barg" alone: absolute; in a compound: a difference
+            first = self.offset_atoms[0]
+            if self.n_atoms == 1 and u.dims == first.dims and u.scale == first.scale:
+                return first
         return u
 
     def expr(self) -> Unit:
@@ -336,7 +512,7 @@ class _Parser:
             name = m.group(0)
             u = _lookup(name, self.text)
             self.n_atoms += 1
-            if u.offset:
+            if u.offset or u.gauge:
                 self.offset_atoms.append(u)
                 u = Unit(u.dims, u.scale)  # a difference inside compounds
         m = _EXP_RE.match(self.s, self.i)
@@ -377,9 +553,55 @@ _NUMBER_RE = re.compile(
     r"\s*([+-]?(?:[0-9]+(?:_[0-9]+)*(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)"
 )
 
+#: "1 h 30 min", "1h30min", "5 ft 2 in": numbers each followed by a unit name
+_SUM_RE = re.compile(r"\s*(?:[0-9]+(?:\.[0-9]*)?\s*[A-Za-z]+\s*){2,}")
+_SUM_PART_RE = re.compile(r"([0-9]+(?:\.[0-9]*)?)\s*([A-Za-z]+)")
+#: "5 bar(g)", "5 bar g", "5 bar(a)": a gauge or absolute mark after the unit
+_MARKED_RE = re.compile(
+    r"\s*[0-9.eE+-]+\s*(mbar|bar|kPa|MPa|psi)\s*(?:\(\s*([gGaA])\s*\)|\s([gGaA]))\s*"
+)
+
+
+def _written_like(text: str) -> str | None:
+    """A message for a value written in a way that is not one number and one unit: a sum
+    of quantities ("1h30min", "20 min 30 s"), a clock time ("1:30"), a gauge or absolute
+    mark after the unit ("5 bar(g)", "5 bar g"); ``None`` for anything else."""
+    if _SUM_RE.fullmatch(text):
+        parts = [(float(n), _TABLE.get(name), name) for n, name in _SUM_PART_RE.findall(text)]
+        entries = [e for _, e, _ in parts]
+        if all(e is not None and not e[2] for e in entries) and len({e[0] for e in entries}) == 1:
+            last = parts[-1]
+            total = sum(n * e[1] for n, e, _ in parts) / last[1][1]
+            return (
+                f"{text.strip()!r} is a sum of {len(parts)} quantities; a value is one number "
+                f"and one unit: write '{total:.12g} {last[2]}'"
+            )
+    m = re.fullmatch(r"\s*[0-9.]+\s*:\s*[0-9]+(?::[0-9]+(?:\.[0-9]*)?)?\s*", text)
+    if m:
+        return (
+            f"{text.strip()!r} looks like a clock time (h:mm or h:mm:ss); a value is one number "
+            "and one unit: write e.g. '90 min' or '5400 s'"
+        )
+    m = _MARKED_RE.fullmatch(text)
+    if m:
+        unit, mark = m.group(1), (m.group(2) or m.group(3)).lower()
+        if mark == "g":
+            return f"write a gauge pressure as '{unit}g' (e.g. '5 {unit}g'), not {text.strip()!r}"
+        return (
+            f"write an absolute pressure as '{unit}'"
+            + (f" or '{unit}a'" if unit in ("bar", "psi") else "")
+            + f", not {text.strip()!r}"
+        )
+    return None
+
 
 def parse_quantity(text: str) -> tuple[float, Unit]:
-    """Split "120 bar" into (120.0, Unit of bar). A string with no unit is dimensionless."""
+    """Split "120 bar" into (120.0, Unit of bar). A string with no unit is dimensionless.
+
+    One rule for every value (plant files, command-line options, sweep cases, the
+    Python API): one number and one unit, the space between them optional ("20min" is
+    "20 min"). Sums ("1 h 30 min", "1h30min") and clock times ("1:30") are refused
+    with the value in one unit in the message."""
     if not isinstance(text, str):
         raise UnitError(f"expected a string like '120 bar', not {type(text).__name__}")
     m = _NUMBER_RE.match(text)
@@ -389,6 +611,9 @@ def parse_quantity(text: str) -> tuple[float, Unit]:
         )
     value = float(m.group(1).replace("_", ""))
     rest = text[m.end() :].strip()
+    why = _written_like(text)
+    if why is not None:
+        raise UnitError(why)
     return value, parse_unit(rest)
 
 
@@ -404,26 +629,31 @@ def _finite(x: float, text) -> float:
     return x
 
 
-def convert(value: float, from_unit: str | Unit, to_unit: str | Unit) -> float:
-    """Convert ``value`` between two units of the same dimension (offsets included)."""
+def convert(
+    value: float, from_unit: str | Unit, to_unit: str | Unit, atmosphere: float | None = None
+) -> float:
+    """Convert ``value`` between two units of the same dimension (offsets included;
+    gauge units against ``atmosphere`` [Pa], default :data:`STANDARD_ATMOSPHERE`)."""
     uf = parse_unit(from_unit) if isinstance(from_unit, str) else from_unit
     ut = parse_unit(to_unit) if isinstance(to_unit, str) else to_unit
     if uf.dims != ut.dims:
         raise UnitError(
             f"cannot convert {from_unit!r} ({uf.dimension}) to {to_unit!r} ({ut.dimension})"
         )
-    si = value * uf.scale + uf.offset
-    return (si - ut.offset) / ut.scale
+    si = value * uf.scale + uf.zero(atmosphere)
+    return (si - ut.zero(atmosphere)) / ut.scale
 
 
-def to_si(value, unit: str = "1") -> float:
+def to_si(value, unit: str = "1", atmosphere: float | None = None) -> float:
     """Turn a plant-file value into a float in the SI unit ``unit``.
 
     ``value`` is a plain number (already in ``unit``, which is an SI unit string
     such as "Pa", "K", "kg/s", "W/(m2.K)", "1") or a string with a unit: "120 bar",
-    "540 degC", "3.6 t/h", "15 min", "50 %". Raises ``UnitError`` when the string
-    cannot be read, its unit has another dimension than ``unit``, or the number is
-    not finite. Booleans are refused (TOML's ``true`` is not a number).
+    "540 degC", "3.6 t/h", "15 min", "50 %", "5 barg" (a gauge pressure: against
+    ``atmosphere`` [Pa], default :data:`STANDARD_ATMOSPHERE`). Raises ``UnitError``
+    when the string cannot be read, its unit has another dimension than ``unit``,
+    or the number is not finite. Booleans are refused (TOML's ``true`` is not a
+    number).
     """
     if isinstance(value, bool):
         raise UnitError(f"expected a number or a string with a unit, not the boolean {value!r}")
@@ -441,12 +671,14 @@ def to_si(value, unit: str = "1") -> float:
         hint = ""
         if "/" in value and re.search(r"/[^()]*[.*·]", value):
             hint = " (products after '/' need parentheses: write 'W/(m2.K)', not 'W/m2.K')"
+        elif target.dims == _T and re.fullmatch(r"\s*\S+\s*m\s*", value):
+            hint = " (minutes are 'min')"
         raise UnitError(
             f"{value!r} has the dimension of {u.dimension}, but {target.dimension} is "
             f"expected (unit {unit!r}){hint}"
         )
-    si = number * u.scale + u.offset
-    return _finite((si - target.offset) / target.scale, value)
+    si = number * u.scale + u.zero(atmosphere)
+    return _finite((si - target.zero(atmosphere)) / target.scale, value)
 
 
 def has_unit(text: str) -> bool:
@@ -455,31 +687,61 @@ def has_unit(text: str) -> bool:
     return bool(m and text[m.end() :].strip())
 
 
-def convert_quantity(v, unit: str, difference: bool = False, lenient_difference: bool = False):
+def _affine(u: Unit, name: str, number: float, atmosphere) -> tuple[str, str]:
+    """(what the value is, how its difference is written) for a unit with an offset:
+    "an absolute temperature (275.15 K: degC and degF have an offset)", "2 K' or '2
+    delta_degC"; "a gauge pressure (301325 Pa absolute, ...)", "2 bar"."""
+    absolute = number * u.scale + u.zero(atmosphere)
+    diff = _DIFFERENCE_OF.get(name, "K").format(n=f"{number:g}")
+    if u.gauge:
+        atm = u.zero(atmosphere)
+        return (
+            f"a gauge pressure ({absolute:g} Pa absolute: gauge units are read against the "
+            f"atmosphere, {atm:g} Pa)",
+            f"{number:g} {diff}",
+        )
+    return f"an absolute temperature ({absolute:g} K: degC and degF have an offset)", (
+        f"{number:g} {diff}"
+    )
+
+
+def convert_quantity(
+    v,
+    unit: str,
+    difference: bool = False,
+    lenient_difference: bool = False,
+    atmosphere: float | None = None,
+):
     """A number or a quantity string ("120 bar") in ``unit`` (SI), with the rules of
-    temperatures: ``difference`` (a delta_K parameter): "2 K" and "2 delta_degC" are
-    2 K, "2 degC" (an absolute temperature) is an error; ``lenient_difference``:
-    "10 degC" may mean 10 K (a sine's amplitude next to its mean in degC).
+    the affine units (degC, degF, and the gauge pressures barg, psig, ...):
+    ``difference`` (a delta_K or delta_Pa parameter): "2 K", "2 delta_degC", "2 bar"
+    are differences, "2 degC" (an absolute temperature) and "2 barg" (a gauge
+    pressure, 3.01325 bar absolute) are errors; ``lenient_difference``: "10 degC"
+    may mean 10 K and "0.5 barg" 0.5 bar (a sine's amplitude next to its mean).
+    Gauge pressures are read against ``atmosphere`` [Pa] (default
+    :data:`STANDARD_ATMOSPHERE`; a plant file's ``[plant] atmosphere``).
     Raises ``UnitError``. Used by ``Param.si_value`` and the plant files alike."""
     if not isinstance(v, str) or not has_unit(v):
-        return to_si(v, unit)
+        return to_si(v, unit, atmosphere)
     number, u = parse_quantity(v)
     target = parse_unit(unit)
-    if u.offset:
-        absolute = number * u.scale + u.offset
+    if u.offset or u.gauge:
         if lenient_difference:  # "10 degC" as a difference is 10 K
             return float(convert(number, Unit(u.dims, u.scale), unit))
+        name = v[_NUMBER_RE.match(v).end() :].strip()
+        what, written = _affine(u, name, number, atmosphere)
         if target.dims != u.dims:
             hint = ""
             if target.dims == parse_unit("1/K").dims:
                 hint = f"; a gain per kelvin is written '{number:g} 1/K'"
+            elif target.dims == parse_unit("1/Pa").dims:
+                hint = f"; a gain per bar is written '{number:g} 1/bar'"
             raise UnitError(
-                f"{v!r} is an absolute temperature ({absolute:g} K: degC and degF have an "
-                f"offset), but {target.dimension} is expected (unit {unit!r}){hint}"
+                f"{v!r} is {what}, but {target.dimension} is expected (unit {unit!r}){hint}"
             )
         if difference:
+            kind = "pressure" if u.gauge else "temperature"
             raise UnitError(
-                f"{v!r} is an absolute temperature ({absolute:g} K), but this parameter is a "
-                f"temperature difference: write '{number:g} K' or '{number:g} delta_degC'"
+                f"{v!r} is {what}, but this parameter is a {kind} difference: write '{written}'"
             )
-    return to_si(v, unit)
+    return to_si(v, unit, atmosphere)

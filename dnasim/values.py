@@ -157,14 +157,16 @@ def param_unit_for(cls, p, signal_units=()) -> str:
 
 
 def quantity(
-    v, unit, errors, table, key, *, difference=False, lenient_difference=False
+    v, unit, errors, table, key, *, difference=False, lenient_difference=False, atmosphere=None
 ) -> float | None:
     """A number or unit string in ``unit`` (SI); ``None`` after reporting an error.
 
-    ``difference``: the parameter is a temperature difference: "2 K" and
-    "2 delta_degC" are 2 K, "2 degC" (an absolute temperature, 275.15 K) is an error.
-    ``lenient_difference``: a difference where "10 degC" may mean 10 K (the
-    amplitude of a sine next to its mean in degC).
+    ``difference``: the parameter is a difference (delta_K, delta_Pa): "2 K" and
+    "2 delta_degC" are 2 K, "2 degC" (an absolute temperature, 275.15 K) is an error,
+    and so is "2 barg" (a gauge pressure). ``lenient_difference``: a difference where
+    "10 degC" may mean 10 K (the amplitude of a sine next to its mean in degC).
+    ``atmosphere`` [Pa]: the zero of the gauge units ("5 barg"); ``None``: the
+    standard atmosphere (``dnasim.units.STANDARD_ATMOSPHERE``).
     """
     if isinstance(v, dict | list):
         errors.add(
@@ -175,7 +177,7 @@ def quantity(
         )
         return None
     try:
-        return convert_quantity(v, unit, difference, lenient_difference)
+        return convert_quantity(v, unit, difference, lenient_difference, atmosphere)
     except UnitError as exc:
         errors.add(table, key, str(exc))
         return None
@@ -190,9 +192,11 @@ def check_range(x: float, p, errors, table, key, shown) -> None:
         errors.add(table, key, f"{shown} is {what}: {text}")
 
 
-def time_function(v: dict, p, errors: Problems, table, key, unit: str, difference=False):
+def time_function(
+    v: dict, p, errors: Problems, table, key, unit: str, difference=False, atmosphere=None
+):
     """Build a time function from an inline table ``{type = "step", ...}``; its
-    values are in ``unit``."""
+    values are in ``unit`` (gauge pressures against ``atmosphere`` [Pa])."""
     sub = tuple(table) + (key,)
     kind = v.get("type")
     if kind is None:
@@ -242,6 +246,7 @@ def time_function(v: dict, p, errors: Problems, table, key, unit: str, differenc
             k,
             difference=difference,
             lenient_difference=k in _TF_DIFFERENCE_KEYS and not difference,
+            atmosphere=atmosphere,
         )
 
     vals: dict[str, Any] = {}
@@ -311,7 +316,11 @@ def time_function(v: dict, p, errors: Problems, table, key, unit: str, differenc
     return f
 
 
-def param_value(value, p, errors, table, key, signal_units=(), cls=None):
+def param_value(value, p, errors, table, key, signal_units=(), cls=None, atmosphere=None):
+    """``value`` of parameter ``p`` as its SI value (a float, int, string, bool or time
+    function), checked by ``p``'s rules; ``None`` after adding a problem to ``errors``.
+    ``atmosphere`` [Pa]: the zero of gauge pressures ("5 barg"), ``None`` the standard
+    atmosphere."""
     kind = param_kind(p)
     unit = param_unit_for(cls, p, signal_units)
     difference = is_difference(cls, p)
@@ -344,8 +353,8 @@ def param_value(value, p, errors, table, key, signal_units=(), cls=None):
                 "allowed only for boundary values and setpoints",
             )
             return None
-        return time_function(value, p, errors, table, key, unit, difference)
-    x = quantity(value, unit, errors, table, key, difference=difference)
+        return time_function(value, p, errors, table, key, unit, difference, atmosphere)
+    x = quantity(value, unit, errors, table, key, difference=difference, atmosphere=atmosphere)
     if x is None:
         return None
     if kind in ("int", "integer"):

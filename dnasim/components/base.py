@@ -154,9 +154,11 @@ class Param:
             )
         return None
 
-    def si_value(self, value):
-        """A number or a unit string ("120 bar", "200 degC") in this parameter's SI
-        unit; other values are returned as they are. Raises ``UnitError``."""
+    def si_value(self, value, atmosphere: float | None = None):
+        """A number or a unit string ("120 bar", "200 degC", "5 barg") in this
+        parameter's SI unit; other values are returned as they are. Gauge pressures
+        are read against ``atmosphere`` [Pa] (``None``: the standard atmosphere,
+        101325 Pa). Raises ``UnitError``."""
         if not isinstance(value, str):
             return value
         from dnasim.units import convert_quantity
@@ -165,7 +167,7 @@ class Param:
         difference = unit.startswith("delta_")
         if difference:
             unit = unit[len("delta_") :]
-        return convert_quantity(value, unit, difference)
+        return convert_quantity(value, unit, difference, atmosphere=atmosphere)
 
 
 def _has_unit_text(value) -> bool:
@@ -175,6 +177,26 @@ def _has_unit_text(value) -> bool:
     return isinstance(value, dict) and any(
         isinstance(v, str) for k, v in value.items() if k != "type"
     )
+
+
+def _atmosphere_value(name: str, atmosphere) -> float | None:
+    """A component's ``atmosphere`` argument as a pressure [Pa] > 0 (or None)."""
+    if atmosphere is None:
+        return None
+    from dnasim.units import UnitError, parse_quantity, to_si
+
+    try:
+        x = to_si(atmosphere, "Pa")
+    except UnitError as err:
+        raise PlantError(f"component '{name}': atmosphere: {err}") from None
+    if isinstance(atmosphere, str) and parse_quantity(atmosphere)[1].gauge:
+        raise PlantError(
+            f"component '{name}': the atmosphere is an absolute pressure (the zero of the "
+            f"gauge units), not {atmosphere!r}"
+        )
+    if not x > 0:
+        raise PlantError(f"component '{name}': the atmosphere must be > 0 Pa (got {x:g} Pa)")
+    return x
 
 
 #: units whose quantities must be > 0 (absolute temperature, pressure, ...)
@@ -554,13 +576,20 @@ class Component:
             REGISTRY[cls.__name__] = cls
 
     # ------------------------------------------------------------------ set-up
-    def __init__(self, name: str, **params):
+    def __init__(self, name: str, *, atmosphere: float | str | None = None, **params):
+        """``params``: numbers [SI], unit strings ("120 bar", "540 degC"), time
+        functions, strings. ``atmosphere``: the ambient pressure [Pa] (or a unit string
+        such as "0.95 bar") against which gauge pressures ("5 barg", "70 psig") are
+        read; ``None``: the standard atmosphere, 101325 Pa (a plant's ``PlantSpec``
+        passes its own)."""
         if not isinstance(name, str) or not name or "." in name or name != name.strip():
             raise PlantError(
                 f"{type(self).__name__}: component name must be a non-empty string without '.' or "
                 f"spaces, got {name!r}"
             )
         self.name = name
+        #: the zero of the gauge pressures in ``params`` [Pa]; None: the standard atmosphere
+        self.atmosphere = _atmosphere_value(name, atmosphere)
         known = {p.name: p for p in self.PARAMS}
         unknown = sorted(set(params) - set(known))
         if unknown:
@@ -600,7 +629,8 @@ class Component:
             from dnasim.units import UnitError
 
             try:
-                value = p.si_value(value)  # "120 bar" from Python as from a plant file
+                # "120 bar" from Python as from a plant file
+                value = p.si_value(value, self.atmosphere)
             except UnitError as err:
                 raise PlantError(
                     f"component '{self.name}': parameter '{p.name}' [{p.unit}]: {err}"
@@ -662,7 +692,9 @@ class Component:
         errors = Problems(f"component '{self.name}' ({type(self).__name__})")
         for name, raw in self.signal_unit_values.items():
             p = known[name]
-            x = param_value(raw, p, errors, (), name, list(signal_units), type(self))
+            x = param_value(
+                raw, p, errors, (), name, list(signal_units), type(self), self.atmosphere
+            )
             if x is not None:
                 self.params[name] = self._validate(p, x)
         errors.raise_if_any()
@@ -682,7 +714,7 @@ class Component:
                 from dnasim.units import UnitError
 
                 try:
-                    v = p.si_value(v)
+                    v = p.si_value(v, self.atmosphere)
                 except UnitError as err:
                     raise PlantError(
                         f"component '{self.name}': parameter '{p.name}' [{p.unit}]: {err}"

@@ -9,11 +9,19 @@ IF97 backward equations.
 The low-level interface (``AbstractState.update(HmassP_INPUTS, h, p)`` and
 then one call per output) is used instead of ``PropsSI``, which parses strings
 and re-creates the state on every call and is 10 to 40 times slower.
+
+At the interpreter's exit the ``AbstractState`` objects are released
+(:func:`release_abstract_states`, an ``atexit`` handler): a medium held by a
+module (the registry's shared instances) would otherwise still be alive when
+CoolProp's nanobind module is torn down, and nanobind then prints some thirty
+lines of "nanobind: leaked ... instances/types/functions" on stderr.
 """
 
 from __future__ import annotations
 
+import atexit
 import math
+import weakref
 
 import CoolProp.CoolProp as CP
 import numpy as np
@@ -37,6 +45,20 @@ _iP = CP.iP
 _iHmass = CP.iHmass
 _TWOPHASE = CP.iphase_twophase
 _INF = math.inf
+
+#: every CoolPropMedium made in this process (weakly): released at exit
+_LIVE: weakref.WeakSet = weakref.WeakSet()
+
+
+def release_abstract_states() -> None:
+    """Drop the ``AbstractState`` of every CoolPropMedium of this process (run at exit
+    by ``atexit``, before CoolProp's module is torn down). A medium used afterwards
+    makes a new one."""
+    for medium in list(_LIVE):
+        medium._AS = None
+
+
+atexit.register(release_abstract_states)
 
 
 class CoolPropMedium(Medium):
@@ -76,6 +98,7 @@ class CoolPropMedium(Medium):
     def __init__(self, fluid: str, backend: str = "HEOS", *, cache_size: int = 4096) -> None:
         super().__init__(fluid, backend, cache_size=cache_size)
         self._AS = CP.AbstractState(backend, fluid)
+        _LIVE.add(self)
         try:
             self.p_critical = float(self._AS.p_critical())
             self.T_critical = float(self._AS.T_critical())
@@ -84,6 +107,11 @@ class CoolPropMedium(Medium):
             self.T_critical = math.nan
         #: a fluid with a critical point has a two-phase region below it
         self.condensable = math.isfinite(self.p_critical)
+
+    def _abstract_state(self):
+        """A new ``AbstractState`` after :func:`release_abstract_states` dropped it."""
+        self._AS = CP.AbstractState(self.backend, self.name)
+        return self._AS
 
     def saturation_enthalpies(self, p):
         """(h_liq, h_vap) [J/kg] at pressures p [Pa] (arrays of the shape of p), by the
@@ -94,7 +122,7 @@ class CoolPropMedium(Medium):
         p = np.asarray(p, dtype=float)
         hl = np.full(p.shape, np.nan)
         hv = np.full(p.shape, np.nan)
-        AS = self._AS
+        AS = self._AS or self._abstract_state()
         for i, pi in enumerate(p.flat):
             if not (0.0 < pi < self.p_critical):
                 continue
@@ -180,7 +208,7 @@ class CoolPropMedium(Medium):
         return {key: v.reshape(p.shape) for key, v in out.items()}
 
     def _compute_state(self, p: float, h: float) -> FluidState:
-        AS = self._AS
+        AS = self._AS or self._abstract_state()
         AS.update(_HP, h, p)
         T = AS.T()
         rho = AS.rhomass()
@@ -200,7 +228,7 @@ class CoolPropMedium(Medium):
         return FluidState(p, h, T, rho, h - p / rho, s, cp, q, d_p, d_h)
 
     def _compute_h_pT(self, p: float, T: float) -> float:
-        AS = self._AS
+        AS = self._AS or self._abstract_state()
         if p < self.p_critical:
             try:
                 AS.update(_PQ, p, 0.0)
@@ -212,6 +240,6 @@ class CoolPropMedium(Medium):
         return AS.hmass()
 
     def _compute_h_pQ(self, p: float, x: float) -> float:
-        AS = self._AS
+        AS = self._AS or self._abstract_state()
         AS.update(_PQ, p, x)
         return AS.hmass()
