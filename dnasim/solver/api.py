@@ -266,6 +266,8 @@ def _solve_dae(
         )
         out.initial(t0, y, yp)
         g_old = [sw.value(t0, y, yp) for sw in switches]
+        for k, sw in enumerate(switches):
+            sw.arm(g_old[k])  # a switch at its zero at t0 (SwitchFunction.arm)
         solver.reinitialize = lambda t, y, yp, h: consistent(
             t, y, yp, "the values at a step that failed repeatedly", h_scale=h
         )
@@ -323,6 +325,9 @@ def _solve_dae(
                         )
                 else:
                     restarts_here, last_restart_t = 0, t_star
+                # an armed element (at its zero since t0) that acted: the new mode's
+                # elements at their zero are armed again (SwitchFunction.arm)
+                from_start = sw.armed is not None and t_star == t_prev and sw.armed[c.located]
                 y_new, yp_new = _run_action(sw, c, problem.n)
                 y_new, yp_new = consistent(
                     t_star, y_new, yp_new, f"the values after the switch {sw.names[c.located]!r}"
@@ -333,9 +338,16 @@ def _solve_dae(
                 )
                 out.restart(t_star, y_new, yp_new)
                 g_old = [sw.value(t_star, y_new, yp_new) for sw in switches]
+                for k, s_k in enumerate(switches):
+                    if from_start:
+                        s_k.arm(g_old[k])
+                    else:
+                        s_k.keep_armed(g_old[k])
                 continue
             out.step(solver, t_prev, solver.t)
             g_old = g_new
+            for k, sw in enumerate(switches):
+                sw.keep_armed(g_new[k])
             if stops and solver.t == stops[0]:
                 stops.pop(0)
                 y_new, yp_new = consistent(
@@ -382,6 +394,8 @@ def _solve_dae(
                 )
                 out.restart(solver.t, y_new, yp_new)
                 g_old = [sw.value(solver.t, y_new, yp_new) for sw in switches]
+                for k, sw in enumerate(switches):
+                    sw.keep_armed(g_old[k])
     except DAEError as exc:
         result = partial_result(False, -1, str(exc))
         if not throw and solver is not None:  # the integration had started
