@@ -102,6 +102,7 @@ import scipy.sparse as sp
 from dnasim.components.base import ROWS_KEY, LocalVector, ScalarRows
 from dnasim.components.physics import upwind_weight
 from dnasim.errors import PlantError, ResidualDomainError
+from dnasim.limits import limit_event
 
 NODE_P_NOMINAL = 1e5  # Pa
 NODE_H_NOMINAL = 1e5  # J/kg
@@ -221,6 +222,7 @@ class System:
         for comp in plant.components.values():  # "0.5 1/K" from Python, now that 1/K is known
             comp.resolve_signal_units(comp.input_units.values())
         names, units, nominal, owner, accumulator = [], [], [], [], []
+        lower, upper = {}, {}  # global index -> declared min / max (Variable.min, .max)
         self.node_index = {}
         for node in plant.node_names():
             self.node_index[node] = len(names)
@@ -236,6 +238,11 @@ class System:
         for comp in plant.components.values():
             table = {}
             for var in comp.variables():
+                for k in range(len(names), len(names) + (var.size or 1)):
+                    if var.min is not None:
+                        lower[k] = float(var.min)
+                    if var.max is not None:
+                        upper[k] = float(var.max)
                 if var.size is None:
                     table[var.name] = len(names)
                     names.append(f"{comp.name}.{var.name}")
@@ -364,6 +371,11 @@ class System:
         self.nominal = np.array(nominal, dtype=float)
         self.var_owner = owner
         self.accumulator = np.array(accumulator, dtype=bool)
+        #: declared ranges per variable (-inf, inf where none): ``dnasim.limits``
+        self.lower = np.full(n, -np.inf)
+        self.upper = np.full(n, np.inf)
+        self.lower[list(lower)] = list(lower.values())
+        self.upper[list(upper)] = list(upper.values())
         self.eq_names = eq_names
         self.eq_owner = eq_owner
         self.rows_y = rows_y
@@ -380,7 +392,11 @@ class System:
         self.events = self._make_events()
 
     def _make_events(self):
-        return [PlantEvent(b, sw) for b in self.blocks for sw in b.comp.switches()]
+        """The components' switches, and the plant's general limits (declared ranges,
+        node states within their media's ranges: ``dnasim.limits``) as the last one."""
+        events = [PlantEvent(b, sw) for b in self.blocks for sw in b.comp.switches()]
+        limits = limit_event(self, self._node_groups())
+        return events + ([limits] if limits is not None else [])
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -465,14 +481,18 @@ class System:
         (``Component.residual``), a batch of alike components as one
         (``batch.residual_into``, see ``evaluation_units``)."""
         for b in units:
-            if type(b) is not ComponentBlock:
-                b.residual_into(t, y, yp, F)
-                continue
-            r = b.comp.residual(
-                t,
-                LocalVector(y[b.gidx], b.index, b.modes),
-                LocalVector(yp[b.gidx], b.index, b.modes),
-            )
+            try:
+                if type(b) is not ComponentBlock:
+                    b.residual_into(t, y, yp, F)
+                    continue
+                r = b.comp.residual(
+                    t,
+                    LocalVector(y[b.gidx], b.index, b.modes),
+                    LocalVector(yp[b.gidx], b.index, b.modes),
+                )
+            except ResidualDomainError as exc:
+                _name_the_component(exc, b, t)
+                raise
             if not self._checked_lengths:
                 nr = np.size(r)
                 ne = b.eq_slice.stop - b.eq_slice.start
@@ -611,6 +631,24 @@ class System:
                 ]
                 units.append((u, np.concatenate(pos)))
         return units, start
+
+
+def _name_the_component(exc: ResidualDomainError, unit, t) -> None:
+    """Prefix the message of a state outside a model's domain (a ``PropertyError``
+    naming the fluid, p, h and the limit) with the component(s) whose residual met it
+    and the time, once; the exception keeps its type and attributes."""
+    if getattr(exc, "component", None) is not None:
+        return
+    if type(unit) is ComponentBlock or len(unit.blocks) == 1:
+        comp = unit.comp if type(unit) is ComponentBlock else unit.blocks[0].comp
+        where = f"component '{comp.name}' ({type(comp).__name__})"
+        exc.component = comp.name
+    else:
+        names = [b.comp.name for b in unit.blocks]
+        shown = ", ".join(f"'{n}'" for n in names[:6]) + (", ..." if len(names) > 6 else "")
+        where = f"one of the components {shown} ({type(unit.blocks[0].comp).__name__})"
+        exc.component = names
+    exc.args = (f"{where} at t = {t:.10g} s: {exc}",) + tuple(exc.args[1:])
 
 
 def evaluation_units(blocks) -> list:

@@ -31,7 +31,7 @@ STAGES: list[tuple[str, list[str]]] = [
     ("plugins", ["dnasim.plugins"]),
     ("signals", ["dnasim.signals"]),
     ("graph", ["dnasim.graph"]),
-    ("system", ["dnasim.system", "dnasim.structure"]),
+    ("system", ["dnasim.system", "dnasim.structure", "dnasim.limits"]),
     ("compiler", ["dnasim.compiler"]),
     ("solver", ["dnasim.solver", "dnasim.initialization", "dnasim.initial_guess"]),
     ("start", ["dnasim.start"]),

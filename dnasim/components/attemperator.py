@@ -91,7 +91,7 @@ class Attemperator(Component):
             Variable("m_steam", "kg/s", mn, doc="steam flow in"),
             Variable("m_water", "kg/s", 0.1 * mn, doc="spray water flow in"),
             Variable("m_out", "kg/s", mn, doc="flow out"),
-            Variable("M", "kg", M_nom, doc="fluid mass"),
+            Variable("M", "kg", M_nom, doc="fluid mass", min=0.0),
             Variable("U", "J", M_nom * 1e3, doc="fluid internal energy"),
             Variable("p_v", "Pa", 1e5, doc="pressure of the volume"),
             Variable("h_v", "J/kg", 1e5, doc="specific enthalpy of the volume"),

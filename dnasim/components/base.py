@@ -314,6 +314,9 @@ class Variable:
     accumulator: a running integral (e.g. mass that has passed a boundary) that
     nothing else depends on; a steady-state start keeps it at its initial value
     instead of forcing its derivative to zero.
+    min, max: the physical range, in ``unit`` (None: unbounded), e.g. a fluid mass
+    M >= 0 kg. A run whose state reaches it stops there with a message naming the
+    component, the variable, the limit and the time (``dnasim.limits``).
     Whether a variable is differential is not declared here: it is differential
     when some equation declares its derivative.
     """
@@ -324,6 +327,8 @@ class Variable:
     size: int | None = None
     doc: str = ""
     accumulator: bool = False
+    min: float | None = None
+    max: float | None = None
 
 
 @dataclass(frozen=True)

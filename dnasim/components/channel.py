@@ -189,7 +189,7 @@ class Channel:
             Variable(
                 self.m, "kg/s", self.m_nominal, n + 1, "flow through face j (0 = inlet, n = outlet)"
             ),
-            Variable(self.M, "kg", M_nominal, n, "fluid mass in volume i"),
+            Variable(self.M, "kg", M_nominal, n, "fluid mass in volume i", min=0.0),
             Variable(self.U, "J", U_nominal, n, "fluid internal energy in volume i"),
             Variable(self.Q, "W", Q_nominal, n, "heat flow from fluid to wall in volume i"),
             Variable(self.pv, "Pa", p_nominal, n, "pressure of volume i"),

@@ -14,6 +14,7 @@ from dnasim.components.base import (
     Output,
     Param,
     SignalPort,
+    Switch,
     Variable,
 )
 from dnasim.components.physics import (
@@ -69,9 +70,13 @@ class Condenser(Component):
     Given start (start = "given"): pressure p0 and hotwell level level0 (default
     0.2 V / A_hotwell); the shell is saturated liquid below the level and saturated
     steam above it. A steady start fixes the level only through the hotwell's
-    static head (weakly): prefer a given start or a level controller. Keep the
-    hotwell from running dry: with no liquid left (x >= 1) the level is 0 but the
-    condensate port still delivers saturated liquid h'.
+    static head (weakly): prefer a given start or a level controller.
+
+    Physical limits, terminal switches on the liquid volume V_l = M (1 - x)/rho'
+    (not clipped): the run stops at the located crossing with a message naming the
+    condenser, its level and the time, when the hotwell runs dry (g = V_l/V, the
+    condensate pump would draw steam) or the shell fills with water (g = (V - V_l)/V,
+    the exhaust would be flooded); neither is modelled beyond.
     """
 
     PARAMS = (
@@ -129,8 +134,11 @@ class Condenser(Component):
             raise PlantError(f"{name}: cooling = 'water' needs UA [W/K]")
         if not self.water and P["Q"] is None:
             raise PlantError(f"{name}: cooling = 'duty' needs the duty Q [W]")
-        if P["level0"] is not None and P["level0"] * P["A_hotwell"] > P["V"]:
-            raise PlantError(f"{name}: level0 A_hotwell exceeds the volume V")
+        if P["level0"] is not None and not 0 <= P["level0"] * P["A_hotwell"] < P["V"]:
+            raise PlantError(
+                f"{name}: level0 = {P['level0']:g} m must lie from 0 up to below the shell's "
+                f"height V/A_hotwell = {P['V'] / P['A_hotwell']:g} m"
+            )
         mw = P["cw_m_nominal"]
         self.m_reg_w = M_REG_REL * mw
         self.cw_k = P["cw_k"]  # with cw_dp_nominal: k = dp_nom rho / m_nom^2, rho at run time
@@ -189,7 +197,7 @@ class Condenser(Component):
         out = [
             Variable("m_s", "kg/s", mn, doc="steam flow in"),
             Variable("m_c", "kg/s", mn, doc="condensate flow out"),
-            Variable("M", "kg", M_nom, doc="mass in the shell"),
+            Variable("M", "kg", M_nom, doc="mass in the shell", min=0.0),
             Variable("U", "J", M_nom * 1e5, doc="internal energy in the shell"),
             Variable("p_v", "Pa", 1e4, doc="shell pressure"),
             Variable("h_v", "J/kg", 1e5, doc="specific enthalpy of the shell's mixture"),
@@ -402,6 +410,62 @@ class Condenser(Component):
         m_abs = math.sqrt(mw * mw + self.m_reg_w * self.m_reg_w)
         ntu = self.params["UA"] / (s1.cp * m_abs)
         return -math.expm1(-ntu) * s1.cp * (T_sat - s1.T)
+
+    # ----------------------------------------------------------------- limits
+    def switches(self):
+        """Terminal switches at the hotwell's limits (class doc): ``hotwell_dry`` and
+        ``full``, on the unclipped liquid volume V_l [m3] relative to V."""
+        P = self.params
+        V, A = P["V"], P["A_hotwell"]
+        last: dict = {}
+
+        def liquid(x):
+            hl, hv, rho_l, _, _ = self.saturation(x["p_v"])
+            V_l = x["M"] * (1.0 - (x["h_v"] - hl) / (hv - hl)) / rho_l
+            last.update(p=x["p_v"], V_l=V_l)
+            return V_l
+
+        def where(t):
+            V_l = last.get("V_l", math.nan)
+            V_l = 0.0 if abs(V_l) < 1e-9 * V else V if abs(V_l - V) < 1e-9 * V else V_l
+            return (
+                f"at t = {t:.6g} s (shell pressure {last.get('p', math.nan) / 1e5:.6g} bar, "
+                f"water V_l = {V_l:.6g} m3 of V = {V:g} m3, level {V_l / A:.4g} m)"
+            )
+
+        head = f"condenser '{self.name}' (Condenser)"
+
+        def dry_message(t):
+            return (
+                f"{head}: the hotwell ran dry {where(t)}; the condensate drawn exceeds the "
+                "steam condensed: check the condensate pump and its level control"
+            )
+
+        def full_message(t):
+            return (
+                f"{head} is full of water {where(t)}: the condensate drawn falls short of "
+                "the steam condensed: check the condensate pump and its level control (a "
+                "flooded condenser is not modelled)"
+            )
+
+        return [
+            Switch(
+                "hotwell_dry",
+                lambda t, x, xp: liquid(x) / V,
+                -1,
+                terminal=True,
+                message=dry_message,
+                doc="the hotwell's water V_l reaches 0",
+            ),
+            Switch(
+                "full",
+                lambda t, x, xp: (V - liquid(x)) / V,
+                -1,
+                terminal=True,
+                message=full_message,
+                doc="the water V_l fills the shell volume V",
+            ),
+        ]
 
     def outputs(self):
         return [

@@ -27,6 +27,24 @@ M and U are the differential states (so mass and energy are conserved to the
 Newton tolerance, as in ``Pipe``); p and V_l follow from mass_def and energy_def.
 The state must stay sub-critical with 0 < V_l < V_t.
 
+Physical limits (terminal switches: the run stops at the located crossing, with a
+message naming the vessel, its level, liquid volume and pressure, and the time;
+``dnasim run`` exits with 1 and results.csv keeps the rows up to it):
+
+  dry       g = V_l / V_t                      the water is used up: V_l = 0       [-]
+  full      g = (V_t - A level) / V_t          the level reaches the top of the
+                                               vessel, V_t/A (V_l + V_b = V_t)     [-]
+  critical  g = (p_c - dp_c - p) / p_c         the pressure comes within dp_c =
+                                               CRITICAL_MARGIN of the critical
+                                               pressure p_c, where the two phases
+                                               become one                          [-]
+
+Beyond them the equations hold no meaning (a negative liquid volume or vapour
+space, no saturation state), and without the stop the integration went on there:
+a drum without feed held M = -3568 kg for many rows before Newton failed, a feed
+stuck open gave V_l = 839 m3 in a 100 m3 drum, and a drum driven towards p_c
+failed with a Newton message naming its V_l and the level controller.
+
 Shrink and swell (Drum with tau_b > 0). In the equilibrium model V_l alone falls
 when the steam flow rises (flashing turns liquid into vapour). The level a gauge
 shows also contains the steam bubbles below the surface, V_b [m3] (Astrom and
@@ -54,6 +72,8 @@ d(M)/dt = sum of port flows, d(U)/dt = sum of port energy flows - dQ_passed/dt.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from dnasim.components.base import (
@@ -63,10 +83,19 @@ from dnasim.components.base import (
     Output,
     Param,
     SignalPort,
+    Switch,
     Variable,
 )
 from dnasim.components.physics import energy_in, saturation_enthalpies
 from dnasim.errors import PlantError, ResidualDomainError
+
+#: the vessel stops this far below the critical pressure p_c [Pa], as MSL's
+#: EquilibriumDrumBoiler asserts (p < p_c - 0.1 bar): at p_c the two phases of the
+#: equilibrium model become one (rho' = rho'', no saturation state above it). Without
+#: the stop, tests/plants/limits/drum_to_critical.toml failed in Newton at 219.8 bar
+#: with a message naming drum.V_l and the level controller; with it, the run reaches
+#: the limit and stops there (measured with margins of 0.1, 0.5 and 1 bar).
+CRITICAL_MARGIN = 1e4
 
 
 def saturation_properties(medium, p: float):
@@ -81,6 +110,15 @@ def saturation_properties(medium, p: float):
     sl = medium.state(p, hl)
     sv = medium.state(p, hv)
     return sl.T, sl.rho, sv.rho, sl.u, sv.u, hl, hv
+
+
+def _tidy(value: float, scale: float) -> float:
+    """``value``, or 0 when it is round-off (below 1e-9 of ``scale``), or ``scale`` when
+    it is that within round-off: a limit's value in a message."""
+    for limit in (0.0, scale):
+        if abs(value - limit) < 1e-9 * abs(scale):
+            return limit
+    return value
 
 
 class _SaturatedVessel(Component):
@@ -147,7 +185,7 @@ class _SaturatedVessel(Component):
         P = self.params
         m_nom = P["m_nominal"]
         out = [
-            Variable("M", "kg", P["V_t"] * 100.0, doc="fluid mass"),
+            Variable("M", "kg", P["V_t"] * 100.0, doc="fluid mass", min=0.0),
             Variable("U", "J", P["V_t"] * 1e8, doc="fluid internal energy + metal m_D cp_D T_s"),
             Variable("p", "Pa", 1e6, doc="pressure"),
             Variable("V_l", "m3", P["V_t"] / 2, doc="liquid volume"),
@@ -340,6 +378,92 @@ class _SaturatedVessel(Component):
     def _bubble_volume(self, x, rho_l, rho_v):
         q_e = self.liquid_inflow(x) - (rho_l * x["V_l"] - x["z"]) / self.tau_b
         return self.tau_b * q_e / rho_v
+
+    # ----------------------------------------------------------------- limits
+    def _kind(self) -> str:
+        return "drum" if isinstance(self, Drum) else "tank"
+
+    def switches(self):
+        """The vessel's physical limits as terminal switches (module doc: dry, full,
+        critical); ``message`` gives the reason with the state at the crossing."""
+        P = self.params
+        V_t, A = P["V_t"], P["A"]
+        last: dict = {}  # the state of the last evaluation (the located crossing)
+
+        def remember(x):
+            last.update(p=x["p"], V_l=x["V_l"], level=x["level"])
+
+        def dry(t, x, xp):
+            remember(x)
+            return x["V_l"] / V_t
+
+        def full(t, x, xp):
+            remember(x)
+            return (V_t - A * x["level"]) / V_t
+
+        def critical(t, x, xp):
+            remember(x)
+            p_c = self.medium.p_critical
+            return (p_c - CRITICAL_MARGIN - x["p"]) / p_c
+
+        def where(t):
+            # round-off at a limit (V_l = -6e-15 m3 when dry) is shown as the limit
+            V_l = _tidy(last.get("V_l", math.nan), V_t)
+            level = _tidy(last.get("level", math.nan), V_t / A)
+            return (
+                f"at t = {t:.6g} s (p = {last.get('p', math.nan) / 1e5:.6g} bar, liquid volume "
+                f"V_l = {V_l:.6g} m3 of V_t = {V_t:g} m3, level {level:.4g} m of {V_t / A:.4g} m)"
+            )
+
+        head = f"{self._kind()} '{self.name}' ({type(self).__name__})"
+
+        def dry_message(t):
+            return (
+                f"{head} ran dry: its liquid volume reached 0 {where(t)}; more water leaves "
+                "(as steam or water) than the feed brings: check the feed flow and its "
+                "level control"
+            )
+
+        def full_message(t):
+            return (
+                f"{head} is full: the level reached the top of the vessel, {V_t / A:.4g} m "
+                f"(V_t/A) {where(t)}; the feed brings more water than leaves: check the "
+                "feed flow and its level control (a vessel full of water is not modelled)"
+            )
+
+        def critical_message(t):
+            p_c = self.medium.p_critical
+            return (
+                f"{head}: the pressure reached {(p_c - CRITICAL_MARGIN) / 1e5:.6g} bar, "
+                f"{CRITICAL_MARGIN / 1e5:g} bar below the critical point of "
+                f"{self.medium.label} ({p_c / 1e5:.6g} bar), {where(t)}; a vessel of "
+                "saturated water and steam has no two phases at and above it: check the "
+                "heat input against the steam outlet"
+            )
+
+        out = [
+            Switch("dry", dry, -1, terminal=True, message=dry_message, doc="V_l reaches 0"),
+            Switch(
+                "full",
+                full,
+                -1,
+                terminal=True,
+                message=full_message,
+                doc="the level reaches the top of the vessel, V_t/A",
+            ),
+        ]
+        if math.isfinite(getattr(self.medium, "p_critical", math.nan)):
+            out.append(
+                Switch(
+                    "critical",
+                    critical,
+                    -1,
+                    terminal=True,
+                    message=critical_message,
+                    doc="p reaches p_c - CRITICAL_MARGIN",
+                )
+            )
+        return out
 
     # ----------------------------------------------------------------- outputs
     def outputs(self):

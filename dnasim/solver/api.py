@@ -264,8 +264,30 @@ def _solve_dae(
             names=variable_names,
             equation_names=equation_names,
         )
-        out.initial(t0, y, yp)
         g_old = [sw.value(t0, y, yp) for sw in switches]
+        past = _terminal_past_zero(switches, g_old)
+        if past is not None:
+            # a limit already crossed at the start: the run cannot begin (no output)
+            k, j = past
+            sw = switches[k]
+            event_log.append(
+                {
+                    "event": k,
+                    "name": sw.names[j],
+                    "element": int(j),
+                    "t": t0,
+                    "iterates": [(t0, float(g_old[k][j]))],
+                    "terminal": True,
+                }
+            )
+            t_events[k].append(t0)
+            y_events[k].append(y)
+            return partial_result(
+                True, 1, f"A terminal switch, {sw.names[j]!r}, is past its zero at t = {t0:.10g}."
+            )
+        out.initial(t0, y, yp)
+        for k, sw in enumerate(switches):
+            sw.arm(g_old[k])  # a switch at its zero at t0 (SwitchFunction.arm)
         solver.reinitialize = lambda t, y, yp, h: consistent(
             t, y, yp, "the values at a step that failed repeatedly", h_scale=h
         )
@@ -306,13 +328,18 @@ def _solve_dae(
                 c = cut[-1]
                 sw = switches[c.switch]
                 t_star = c.t
-                out.step(solver, t_prev, t_star)
                 if sw.terminal:
+                    # the run ends with the last state on the old side of the switch (a
+                    # vessel's level at its limit, not a round-off beyond it), which is
+                    # the last output point, also between output times
+                    out.step(solver, t_prev, _old_side(c, g_old[c.switch]))
+                    out.final()
                     status, message = (
                         1,
                         f"A terminal switch, {sw.names[c.located]!r}, fired at t = {t_star:.10g}.",
                     )
                     break
+                out.step(solver, t_prev, t_star)
                 if t_star == last_restart_t:
                     restarts_here += 1
                     if restarts_here > MAX_RESTARTS_AT_ONE_TIME:
@@ -323,6 +350,9 @@ def _solve_dae(
                         )
                 else:
                     restarts_here, last_restart_t = 0, t_star
+                # an armed element (at its zero since t0) that acted: the new mode's
+                # elements at their zero are armed again (SwitchFunction.arm)
+                from_start = sw.armed is not None and t_star == t_prev and sw.armed[c.located]
                 y_new, yp_new = _run_action(sw, c, problem.n)
                 y_new, yp_new = consistent(
                     t_star, y_new, yp_new, f"the values after the switch {sw.names[c.located]!r}"
@@ -333,9 +363,16 @@ def _solve_dae(
                 )
                 out.restart(t_star, y_new, yp_new)
                 g_old = [sw.value(t_star, y_new, yp_new) for sw in switches]
+                for k, s_k in enumerate(switches):
+                    if from_start:
+                        s_k.arm(g_old[k])
+                    else:
+                        s_k.keep_armed(g_old[k])
                 continue
             out.step(solver, t_prev, solver.t)
             g_old = g_new
+            for k, sw in enumerate(switches):
+                sw.keep_armed(g_new[k])
             if stops and solver.t == stops[0]:
                 stops.pop(0)
                 y_new, yp_new = consistent(
@@ -382,6 +419,8 @@ def _solve_dae(
                 )
                 out.restart(solver.t, y_new, yp_new)
                 g_old = [sw.value(solver.t, y_new, yp_new) for sw in switches]
+                for k, sw in enumerate(switches):
+                    sw.keep_armed(g_old[k])
     except DAEError as exc:
         result = partial_result(False, -1, str(exc))
         if not throw and solver is not None:  # the integration had started
@@ -457,6 +496,29 @@ def _crossings(solver, switches, g_old, g_new, t_prev) -> list[_Crossing]:
         if c.restarts:
             break
     return result
+
+
+def _terminal_past_zero(switches, g0) -> tuple[int, int] | None:
+    """(switch, element) of the first directed terminal switch that is strictly past its
+    zero (on the side its direction reports) at the start, or None."""
+    for k, sw in enumerate(switches):
+        if not sw.terminal:
+            continue
+        past = np.flatnonzero((sw.direction != 0) & (-sw.direction * g0[k] < 0.0))
+        if past.size:
+            return k, int(past[0])
+    return None
+
+
+def _old_side(c: _Crossing, g_a: np.ndarray) -> float:
+    """The latest time of the located element's iterates before ``c.t`` on the side of
+    its value ``g_a`` at the start of the step (the old-side end of the final bracket,
+    a few ulp before the crossing); ``c.t`` when g is exactly zero there (the search
+    stopped on the zero itself) or when there is none (a crossing at the step's start)."""
+    if any(t == c.t and v == 0.0 for t, v in c.iterates):
+        return c.t
+    old = np.sign(g_a[c.located])
+    return max((t for t, v in c.iterates if t < c.t and np.sign(v) == old), default=c.t)
 
 
 def _predicted_crossing(solver, kinks, t_a, t_b):
@@ -609,6 +671,12 @@ class _Output:
                 self._emit(te, *solver.interpolate(te))
             self.grid.advance()
             te = self.grid.peek()
+
+    def final(self):
+        """The state at the end of the last step as the last output point (a run stopped
+        by a terminal switch between output times)."""
+        if self.left is not None and self.last_t != self.left[0]:
+            self._emit(*self.left)
 
     def restart(self, t, y, yp):
         """After a discontinuity at t: the state right after it, an extra point at the

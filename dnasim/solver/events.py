@@ -65,6 +65,8 @@ class SwitchFunction:
     restart_only: bool = False
     kink: bool = False
     rearm: bool = False
+    #: per element: at or past its zero since the start (``arm``), or None
+    armed: np.ndarray | None = None
 
     @classmethod
     def wrap(cls, g, index) -> SwitchFunction:
@@ -161,10 +163,46 @@ class SwitchFunction:
         wanted = (self.direction == 0) | ((self.direction > 0) == rising)
         return (change & wanted) | self.missed(g_old, g_new)
 
+    def arm(self, g: np.ndarray) -> None:
+        """The rule of the start (t0): an element of a directed switch that changes a mode
+        or stops the run (an action, or terminal) whose g is exactly zero at t0, or
+        already on the side its direction reports, takes the mode the dynamics demand.
+        It is *armed*: when the trajectory moves it further to the reported side (the
+        next steps' g, see ``missed``), it crossed at the start of that step, and the
+        switch acts there (at t0 when the first step moves it); when it moves to the
+        other side (g strictly on the side of the current mode), it is disarmed and
+        seen as any other element from then on.
+
+        Why: without it an element that starts at g = 0 never changes sign (``crossed``
+        needs g_old != 0), so a limit that starts exactly at its switching point is never
+        engaged. Measured on the Modelica Standard Library's Fluid.Examples.DrumBoiler
+        (plants/msl_drum_boiler.toml): its feed limiter starts at its lower limit 0 with
+        the level rising, and the feed flow went to -4.7 kg/s (water drawn out of the
+        drum) for 760 s, 1.4 bar off MSL's reference result.
+
+        The first derivative of g does not decide (that drum starts at rest: the heat
+        ramps from 0, so dg/dt = 0 at t0 and the second derivative moves it); the
+        steps do, as many as it takes g to leave zero."""
+        if not (self.terminal or self.action is not None):
+            self.armed = None
+            return
+        g = np.asarray(g, dtype=float).reshape(self.size)
+        armed = (self.direction != 0) & (-self.direction * g <= 0.0)
+        self.armed = armed if armed.any() else None
+
+    def keep_armed(self, g: np.ndarray) -> None:
+        """Disarm the elements that ``g`` puts strictly on the side of their mode."""
+        if self.armed is None:
+            return
+        g = np.asarray(g, dtype=float).reshape(self.size)
+        armed = self.armed & (-self.direction * g <= 0.0)
+        self.armed = armed if armed.any() else None
+
     def missed(self, g_old: np.ndarray, g_new: np.ndarray) -> np.ndarray:
-        """Per element of a directed, re-arming switch (``rearm``): g_old already on (or at) the
-        side its direction reports, and g_new further on it. Such an element crossed at
-        the start of the step, where its sign was lost.
+        """Per element of a directed, re-arming switch (``rearm``), or an element armed at
+        the start (``arm``): g_old already on (or at) the side its direction reports, and
+        g_new further on it. Such an element crossed at the start of the step, where its
+        sign was lost.
 
         It happens after a restart: the crossing is located on the step's interpolant,
         whose algebraic unknowns (a volume's h, say) are not exactly consistent with its
@@ -176,12 +214,15 @@ class SwitchFunction:
         kJ/kg below the line, its mass growing to 138 kg in 2.5 L, exit 0.
         Moving away from zero (not back towards it, as a PI controller's output that
         reached its limit exactly does) is what marks it."""
-        if self.action is None or not self.rearm:
+        rearming = self.action is not None and self.rearm
+        if not rearming and self.armed is None:
             return np.zeros(np.shape(g_new), dtype=bool)
         d = np.broadcast_to(self.direction, np.shape(g_new))
         down = (d < 0) & (g_old <= 0.0) & (g_new < g_old)
         up = (d > 0) & (g_old >= 0.0) & (g_new > g_old)
-        return down | up
+        if rearming:
+            return down | up
+        return (down | up) & np.broadcast_to(self.armed, np.shape(g_new))
 
 
 def _or_zero(v):

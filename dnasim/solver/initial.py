@@ -254,7 +254,12 @@ def _newton(
         u = np.where(y_unknown, y, yp)
         fresh = jac is None
         if fresh:
-            jac = _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix)
+            try:
+                jac = _jacobian(residual, t, y, yp, f, u, uw, ymask, ypmask, matrix)
+            except ResidualDomainError as exc:
+                # a finite-difference increment left the model's domain (a state at
+                # IF97's limit): no Newton step from here, with the reason
+                return False, y, yp, f, scaled, uw, f"the residual could not be evaluated: {exc}"
             d = None
             try:
                 matrix.factorize()
