@@ -25,9 +25,15 @@ class DrainValve(ControlValve):
                                             state; choked below eta_c(omega) p_1
 
     So steam or a steam-water mixture reaching the drain passes far less mass than
-    condensate at the same pressures (10 bar saturated -> 5 bar, same K: saturated
-    steam about 1/9 of the subcooled liquid's flow). The valve is an ideal nozzle
-    for the flashing (no pressure recovery, F_L = 1). K from ``Kv``, ``Cv``, ``A``
+    condensate at the same pressures (10 bar -> 5 bar, the same K: saturated steam
+    passes 1/21 of the flow of condensate at 150 degC and 1/4.6 of saturated water's,
+    tests/test_valve_laws.py). The valve is an ideal nozzle for the flashing (no
+    pressure recovery, F_L = 1), and the flashing is in equilibrium: through a short
+    passage a saturated or slightly subcooled liquid flashes late and passes more
+    than the HEM gives (non-equilibrium flashing, Henry and Fauske 1971), so the law
+    is conservative (low) there; the
+    omega method is within 2.3 % of the exact equilibrium nozzle (IAPWS-95) from
+    subcooled liquid to superheated steam. K from ``Kv``, ``Cv``, ``A``
     with ``K_d`` or the nominal point (taken as incompressible), the opening from
     the parameter ``opening`` or the signal ``z`` (a level controller), and every
     other parameter as for ``ControlValve``; ``law = "iec"`` gives the IEC 60534
