@@ -195,7 +195,10 @@ def signal_sources(plant):
         if src.unit != "*" or key in seen:
             return src.unit
         ins = [k for k in sources if k[0] == src.owner]  # the block's own inputs
-        return unit_of(ins[0], (*seen, key)) if ins else "*"
+        if not ins:
+            return "*"
+        units = {k[1]: unit_of(k, (*seen, key)) for k in ins}
+        return plant.components[src.owner].signal_output_unit(src.variable, units)
 
     for (dname, inp), src in sources.items():
         dst = plant.components[dname]

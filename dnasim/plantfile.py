@@ -519,11 +519,6 @@ def _spec_builder(comps: dict, registry, errors: Problems, atmosphere: float | N
     built: dict[str, ComponentSpec | None] = {}
     building: set[str] = set()
 
-    def first_input(cname):
-        table = comps.get(cname)
-        inputs = table.get("inputs") if isinstance(table, dict) else None
-        return next(iter(inputs.values()), None) if isinstance(inputs, dict) else None
-
     def ref_unit(ref, seen=()):
         parts = split_ref(ref)
         if parts is None:
@@ -540,8 +535,15 @@ def _spec_builder(comps: dict, registry, errors: Problems, atmosphere: float | N
         if isinstance(found, str) or found is None:
             return None
         unit = found.unit
-        if unit == "*":
-            return ref_unit(first_input(c), (*seen, c))
+        if unit == "*":  # follows the block's inputs (Component.signal_output_unit)
+            table = comps.get(c)
+            inputs = table.get("inputs") if isinstance(table, dict) else None
+            if not isinstance(inputs, dict) or not inputs:
+                return None
+            units = {k: ref_unit(r, (*seen, c)) or "*" for k, r in inputs.items()}
+            unit = other.instance.signal_output_unit(found.variable, units)
+            if unit == "*":
+                return None
         try:
             parse_unit(unit)
         except UnitError:

@@ -12,8 +12,10 @@ resolved once, when the plant is compiled:
   ``"X~T.T_s"``, T = T(p, h) of the node's medium, no lag).
 
 The unit of the source is the output's or the variable's declared unit (a signal
-output declared with unit ``"*"`` has the unit of its block's first linked input,
-e.g. a ``Gain`` or ``Limiter`` without a ``unit`` parameter). A signal input with
+output declared with unit ``"*"`` has the unit its block derives from its linked
+inputs' units, ``Component.signal_output_unit``: the first input's for a ``Gain`` or
+``Limiter`` without a ``unit`` parameter, u1's times u2's for a ``Product``, u1's
+over u2's for a ``Division``). A signal input with
 a unit other than ``"*"`` takes only sources of the same dimension: a
 temperature wired to a valve opening is an input error naming both ends.
 

@@ -687,7 +687,8 @@ def evaluation_units(blocks) -> list:
 
 def _link_sources(plant) -> dict:
     """(component, input) -> ``dnasim.signals.Source`` of every link; a signal
-    output of unit "*" gets the unit of its block's first linked input."""
+    output of unit "*" gets the unit its block derives from its linked inputs'
+    (``Component.signal_output_unit``: the first input's by default)."""
     from dnasim.signals import resolve
 
     nodes = set(plant.node_names())
@@ -703,9 +704,11 @@ def _link_sources(plant) -> dict:
     for _ in range(len(out)):
         for key, src in out.items():
             if src.unit == "*":
-                first = next((s for k, s in out.items() if k[0] == src.owner), None)
-                if first is not None and first.unit != "*":
-                    out[key] = type(src)(src.owner, src.ref, src.kind, src.variable, first.unit)
+                ins = {k[1]: s.unit for k, s in out.items() if k[0] == src.owner}
+                owner = plant.components[src.owner]
+                unit = owner.signal_output_unit(src.variable, ins) if ins else "*"
+                if unit != "*":
+                    out[key] = type(src)(src.owner, src.ref, src.kind, src.variable, unit)
     return out
 
 

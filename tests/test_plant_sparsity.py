@@ -157,8 +157,34 @@ def plant_file(name):
     return load(Path(__file__).parent / "plants" / name).plant
 
 
+def relief_plant():
+    """A popped safety valve part-way up its lift curve (the lift depends on the inlet
+    pressure there), steam from a 102 bar header to the atmosphere."""
+    from dnasim.components.safety_valve import SafetyValve
+
+    plant = Plant("relief", medium="Water")
+    plant.add(PressureBoundary("header", p=102e5, T=650.0, m_nominal=5.0))
+    plant.add(
+        SafetyValve(
+            "sv", p_set=100e5, A=1e-3, K_d=0.9, pop_lift=0.5, overpressure=0.05, m_nominal=5.0
+        )
+    )
+    plant.add(PressureBoundary("vent", p=1e5, m_nominal=5.0))
+    for a, b in [
+        ("header.port", "n1"),
+        ("sv.inlet", "n1"),
+        ("sv.outlet", "n2"),
+        ("vent.port", "n2"),
+    ]:
+        plant.connect(a, b)
+    return plant
+
+
 PLANTS = {
     "air_pipe": lambda: air_pipe_plant(3),
+    "relief": relief_plant,
+    "signal_blocks_sine": lambda: plant_file("signal_blocks_sine.toml"),
+    "drain_steam_blowthrough": lambda: plant_file("drain_steam_blowthrough.toml"),
     "attemperator": attemperator_plant,
     "hx": hx_plant,
     "signals": signals_plant,

@@ -766,6 +766,15 @@ class Component:
     def signal_outputs(self) -> list[SignalPort]:
         return list(self.SIGNAL_OUTPUTS)
 
+    def signal_output_unit(self, output: str, input_units: dict) -> str:
+        """The unit of the signal output ``output`` declared with unit "*" (it follows
+        the inputs), from ``input_units`` (input name -> unit of the linked source, in
+        link order; "*" where that is not known yet): by default the first input's
+        (a ``Gain``, a ``Limiter``). A block whose output unit is a function of several
+        inputs' (``Product``: u1 u2, ``Division``: u1/u2) overrides this; the compiler
+        and the System ask it when they resolve a link's unit. "*" when unknown."""
+        return next(iter(input_units.values()), "*")
+
     def variables(self) -> list[Variable]:
         return []
 

@@ -17,7 +17,18 @@ from dnasim.components.base import (
     flow_through_ports,
 )
 from dnasim.components.physics import softplus, upwind_mean, valve_flow
+from dnasim.components.valve_laws import (
+    EXPONENT_MODELS,
+    critical_pressure_ratio,
+    inlet_exponent,
+    nozzle_factor,
+    omega_critical_ratio,
+    omega_factor,
+    omega_subcooled_critical_ratio,
+    omega_subcooled_factor,
+)
 from dnasim.errors import PlantError
+from dnasim.media.isentropic import isentropic_exponent
 
 #: Kv [m3/h] -> K [m2] in m = K sqrt(rho dp): Kv is the water flow in m3/h at
 #: dp = 1 bar and rho_0 = 1000 kg/m3, so K = Kv / 3600 / sqrt(1e5 / 1000) [m2]
@@ -57,6 +68,31 @@ def vapour_pressure(medium, T):
     return (p_c if T >= T_c else CP.PropsSI("P", "T", T, "Q", 0, fluid)), p_c
 
 
+def hem_omega(medium, st):
+    """The omega method at the upstream state ``st`` (``valve_laws``): (phi, eps_c) with
+    phi(eps) [-] the factor at eps = dp/p_1 and eps_c = 1 - eta_c [-] its choking limit.
+
+    A subcooled liquid (a condensable medium below its critical pressure, h < h'(p)):
+    p_s = p_sat(T_1), eta_s = p_s/p_1, omega_s = 1/kappa_s of the saturated liquid
+    (equilibrium, dome side) at p_s. Otherwise (two-phase, vapour, gas, supercritical):
+    omega = 1/kappa_s of the state itself, smoothed across the dew line
+    (``valve_laws.inlet_exponent``)."""
+    p1 = st.p
+    if getattr(medium, "condensable", False):
+        h_l, _ = medium.saturation_enthalpies(np.array([p1]))
+        h_l = float(h_l[0])
+        if math.isfinite(h_l) and st.h < h_l:
+            p_s, _ = vapour_pressure(medium, st.T)
+            eta_s = min(p_s / p1, 1.0)
+            hs, _ = medium.saturation_enthalpies(np.array([p_s]))
+            omega_s = 1.0 / isentropic_exponent(medium.state(p_s, float(hs[0])))
+            eta_c = omega_subcooled_critical_ratio(omega_s, eta_s)
+            return (lambda e: omega_subcooled_factor(e, omega_s, eta_s)), 1.0 - eta_c
+    omega = 1.0 / inlet_exponent(medium, st, "isentropic")
+    eta_c = omega_critical_ratio(omega)
+    return (lambda e: omega_factor(e, omega)), 1.0 - eta_c
+
+
 class ControlValve(Component):
     """Control valve after IEC 60534-2-1, liquids and gases/steam, either flow direction.
 
@@ -74,6 +110,17 @@ class ControlValve(Component):
       gas, steam    x = dp/p_1,  x_e = clip(x, F_g x_T),  F_g = gamma/1.4,
                     Y = 1 - |x_e|/(3 F_g x_T),  dp_e = x_e p_1          (choked at x >= F_g x_T)
       flow (linear) m = C_lin z_e dp          (law = "linear": laminar)              [kg/s]
+      flow function m = K z_e phi sqrt(rho_1) g(eps_e p_1)    (law = "flow_function")
+                    gas: eps = dp/p_1, eps_e = clip(eps, 1 - r_c), phi = nozzle_factor
+                    (the isentropic nozzle, ClaRa's Quadratic_FlowFunction: m = K_d A
+                    Psi(p_2/p_1, gamma) sqrt(2 rho_1 p_1), choked at r_c =
+                    (2/(gamma + 1))^(gamma/(gamma - 1))); liquid: phi = 1 (Bernoulli)
+      HEM           m = K z_e phi sqrt(rho_1) g(eps_e p_1)    (law = "hem", drains)
+                    the omega method (homogeneous equilibrium flashing flow, API 520
+                    Annex C) for every inlet state: subcooled liquid (flashing at the
+                    throat when p_2 < p_sat(T_1)), two-phase mixture (rho_1 the
+                    homogeneous density, omega = 1/kappa_s of the equilibrium mixture),
+                    steam or gas (omega = 1/kappa_s); choked at eps_c = 1 - eta_c
       z_e           = leakage + (1 - leakage) f(z)
       f(z)          linear z; equal_percentage R^(z - 1) (for z < 0.01 linear to 0);
                     quick_opening 1 - (1 - z)^2; table: PCHIP through (char_z, char_f)
@@ -83,12 +130,27 @@ class ControlValve(Component):
     (K = Kv/36000 m2), ``Cv`` [US gpm/psi^0.5] (Kv = 0.865 Cv), or the nominal
     point (``m_nominal``, ``dp_nominal``, ``rho_nominal``, and for gas ``p_nominal``):
     K = m_nom / (Y_nom sqrt(rho_nom dp_nom)) so that the open valve passes m_nom
-    there. For law = "linear": ``C_lin`` [kg/(s Pa)] or C_lin = m_nom/dp_nom.
+    there (Y_nom with the constant gamma; 1 for the HEM law), or a flow area ``A``
+    [m2] with discharge coefficient ``K_d`` (K = sqrt(2) K_d A: K sqrt(rho dp) =
+    K_d A sqrt(2 rho dp); ClaRa's zeta [1/m4] is 1/(K_d A)^2). For law = "linear":
+    ``C_lin`` [kg/(s Pa)] or C_lin = m_nom/dp_nom. The laws of
+    ``dnasim.components.valve_laws`` (equations, sources) give phi.
 
     Service: "liquid" or "gas" (steam is "gas"); by default a condensable medium
     is "liquid" when the upstream state is subcooled liquid and "gas" otherwise
-    (the law changes at the saturation line: a kink), a gas medium "gas". gamma
-    defaults to cp/(cp - R) for an ideal-gas medium, 1.3 otherwise (steam).
+    (the law changes at the saturation line: a kink), a gas medium "gas". The HEM
+    law covers every phase itself (no ``service``).
+
+    gamma, the exponent of the gas laws, by ``gamma_model``: "fixed" (default) the
+    parameter ``gamma``, else cp/(cp - R) for an ideal-gas medium, 1.3 otherwise (the
+    usual value for superheated steam; dry saturated steam: 1.135); "isentropic"
+    kappa_s = -(v/p)(dp/dv)_s of the real fluid at the upstream state (IF97 steam:
+    1.24 to 1.33 superheated, 1.14 dry saturated at 10 bar, 1.04 at x = 0.5; an
+    ideal gas: cp/(cp - R) at its temperature); "cp_cv" the ratio cp/cv of the
+    upstream state (IEC 60534-2-1's "specific heat ratio", ClaRa's
+    GenericValveVLE_L1; wet steam and liquid: the dew-line value), which near
+    saturation at high pressure is far from the expansion's exponent (100 bar: 2.30);
+    see ``valve_laws.inlet_exponent``.
 
     Throttling is isenthalpic both ways (fluid leaves through the outlet with the
     inlet node's h and vice versa), the flow is odd in dp with a finite slope at
@@ -104,13 +166,16 @@ class ControlValve(Component):
         Param("rho_nominal", "kg/m3", None, "inlet density of the nominal point", min=0.0),
         Param("p_nominal", "Pa", None, "inlet pressure of the nominal point (gas)", min=0.0),
         Param("C_lin", "kg/(s.Pa)", None, "flow coefficient of the linear law", min=0.0),
+        Param("A", "m2", None, "flow area (with K_d, instead of Kv: K = sqrt(2) K_d A)", min=0.0),
+        Param("K_d", "1", 1.0, "discharge coefficient of the flow area A", min=0.0, max=1.0),
         Param(
             "law",
             "1",
             "iec",
-            "flow law: IEC 60534 (turbulent) or linear (laminar)",
+            "flow law: IEC 60534 (turbulent), linear (laminar), flow_function (isentropic "
+            "nozzle, ClaRa) or hem (flashing two-phase, omega method: drains)",
             kind="string",
-            choices=("iec", "linear"),
+            choices=("iec", "linear", "flow_function", "hem"),
         ),
         Param(
             "service",
@@ -134,6 +199,15 @@ class ControlValve(Component):
         Param("F_L", "1", 0.9, "liquid pressure recovery factor", min=0.0, max=1.0),
         Param("x_T", "1", 0.7, "pressure differential ratio factor at choked flow", min=0.0),
         Param("gamma", "1", None, "isentropic exponent of the gas (default: see above)", min=1.0),
+        Param(
+            "gamma_model",
+            "1",
+            "fixed",
+            "exponent of the gas laws: fixed (gamma), isentropic (kappa_s of the upstream "
+            "state) or cp_cv (its cp/cv)",
+            kind="string",
+            choices=EXPONENT_MODELS,
+        ),
         Param(
             "opening",
             "1",
@@ -170,7 +244,7 @@ class ControlValve(Component):
         P = self.params
         name = f"component '{self.name}' ({type(self).__name__})"
         self.opening_from_signal = self.HAS_OPENING and P["opening"] is None
-        given = [k for k in ("Kv", "Cv", "dp_nominal") if P[k] is not None]
+        given = [k for k in ("Kv", "Cv", "A", "dp_nominal") if P[k] is not None]
         if P["law"] == "linear":
             if P["C_lin"] is None and P["dp_nominal"] is None:
                 raise PlantError(
@@ -178,11 +252,22 @@ class ControlValve(Component):
                 )
         elif len(given) != 1:
             raise PlantError(
-                f"{name}: give exactly one of Kv, Cv or the nominal point (dp_nominal with "
-                f"rho_nominal and m_nominal){'; got ' + ', '.join(given) if given else ''}"
+                f"{name}: give exactly one of Kv, Cv, A (with K_d) or the nominal point "
+                f"(dp_nominal with rho_nominal and m_nominal)"
+                f"{'; got ' + ', '.join(given) if given else ''}"
             )
         elif P["dp_nominal"] is not None and P["rho_nominal"] is None:
             raise PlantError(f"{name}: the nominal point needs rho_nominal with dp_nominal")
+        if P["gamma_model"] != "fixed" and P["gamma"] is not None:
+            raise PlantError(
+                f"{name}: gamma = {P['gamma']} is a constant exponent, but gamma_model = "
+                f"'{P['gamma_model']}' takes it from the medium; give one of them"
+            )
+        if P["law"] == "hem" and P["service"] is not None:
+            raise PlantError(
+                f"{name}: law 'hem' covers liquid, two-phase and gas inlets itself; "
+                "'service' applies to the iec and flow_function laws"
+            )
         self._table = None
         if P["characteristic"] == "table":
             if P["char_z"] is None or P["char_f"] is None:
@@ -214,7 +299,8 @@ class ControlValve(Component):
                 "flow",
                 y=dep,
                 unit="kg/s",
-                doc="m = K z_e Y sqrt(rho_1 dp_e) (IEC 60534) or C_lin z_e dp",
+                doc="m = K z_e Y sqrt(rho_1 dp_e) (IEC 60534), K z_e phi sqrt(rho_1 dp_e) "
+                "(flow_function, hem) or C_lin z_e dp",
                 residual=lambda t, x, xp: x["m"] - self.flow(t, x),
             )
         ]
@@ -261,12 +347,21 @@ class ControlValve(Component):
         return "liquid" if np.isfinite(hl[0]) and state1.h < hl[0] else "gas"
 
     def gamma(self):
+        """The constant exponent [-] (gamma_model "fixed"): the parameter gamma, else
+        cp/(cp - R) of an ideal-gas medium, 1.3 otherwise."""
         if self.params["gamma"] is not None:
             return self.params["gamma"]
         R, cp = getattr(self.medium, "R", None), getattr(self.medium, "cp", None)
         if isinstance(R, float) and isinstance(cp, float) and cp > R:
             return cp / (cp - R)
         return 1.3
+
+    def exponent(self, state1):
+        """gamma [-] of the gas laws at the upstream state ``state1`` (``gamma_model``)."""
+        model = self.params["gamma_model"]
+        if model == "fixed":
+            return self.gamma()
+        return inlet_exponent(self.medium, state1, model)
 
     @property
     def K(self) -> float:
@@ -277,12 +372,19 @@ class ControlValve(Component):
                 self._K = P["Kv"] * KV_TO_K
             elif P["Cv"] is not None:
                 self._K = P["Cv"] * KV_PER_CV * KV_TO_K
+            elif P["A"] is not None:
+                self._K = math.sqrt(2.0) * P["K_d"] * P["A"]
             else:
                 Y = 1.0
-                if P["p_nominal"] is not None and self.params["service"] != "liquid":
+                gas = P["p_nominal"] is not None and P["service"] != "liquid"
+                if gas and P["law"] == "iec":
                     Fg_xT = self.gamma() / 1.4 * P["x_T"]
                     x = min(P["dp_nominal"] / P["p_nominal"], Fg_xT)
                     Y = 1.0 - x / (3.0 * Fg_xT)
+                elif gas and P["law"] == "flow_function":
+                    g = self.gamma()
+                    x = min(P["dp_nominal"] / P["p_nominal"], 1.0 - critical_pressure_ratio(g))
+                    Y = nozzle_factor(x, g) * math.sqrt(x * P["p_nominal"] / P["dp_nominal"])
                 self._K = P["m_nominal"] / (Y * math.sqrt(P["rho_nominal"] * P["dp_nominal"]))
         return self._K
 
@@ -294,7 +396,44 @@ class ControlValve(Component):
         if P["law"] == "linear":
             C = P["C_lin"] if P["C_lin"] is not None else P["m_nominal"] / P["dp_nominal"]
             return C * z_e * dp
+        if P["law"] == "flow_function":
+            return self.K * z_e * self.flow_function_factor(x, dp)
+        if P["law"] == "hem":
+            return self.K * z_e * self.hem_factor(x, dp)
         return self.K * z_e * self.iec_factor(x, dp)
+
+    def _upstream(self, x, dp):
+        """(inlet state, outlet state, rho_1 [kg/m3], p_1 [Pa]): rho_1 and p_1 smooth
+        upwind means by dp over dp_reg."""
+        s_in = self.medium.state(x["inlet.p"], x["inlet.h"])
+        s_out = self.medium.state(x["outlet.p"], x["outlet.h"])
+        reg = self.params["dp_reg"]
+        rho1 = float(upwind_mean(dp, s_in.rho, s_out.rho, reg))
+        p1 = float(upwind_mean(dp, s_in.p, s_out.p, reg))
+        return s_in, s_out, rho1, p1
+
+    def flow_function_factor(self, x, dp):
+        """phi sqrt(rho_1) g(eps_e p_1) [sqrt(kg/m3) Pa^0.5]: the flow per unit K z_e of
+        the nozzle flow function (gas), or Bernoulli's sqrt(rho_1) g(dp) (liquid)."""
+        reg = self.params["dp_reg"]
+        s_in, s_out, rho1, p1 = self._upstream(x, dp)
+        up = s_in if dp >= 0 else s_out
+        if self.service(up) == "liquid":
+            return math.sqrt(rho1) * valve_flow(1.0, 1.0, dp, reg)
+        kappa = self.exponent(up)
+        eps_c = 1.0 - critical_pressure_ratio(kappa)
+        eps = odd_limit(dp / p1, eps_c, CHOKE_REG_REL * eps_c)
+        return nozzle_factor(eps, kappa) * math.sqrt(rho1) * valve_flow(1.0, 1.0, eps * p1, reg)
+
+    def hem_factor(self, x, dp):
+        """phi sqrt(rho_1) g(eps_e p_1) [sqrt(kg/m3) Pa^0.5]: the flow per unit K z_e of
+        the omega method (HEM) from the upstream state (``hem_omega``)."""
+        reg = self.params["dp_reg"]
+        s_in, s_out, rho1, p1 = self._upstream(x, dp)
+        up = s_in if dp >= 0 else s_out
+        phi, eps_c = hem_omega(self.medium, up)
+        eps = odd_limit(dp / p1, eps_c, CHOKE_REG_REL * eps_c) if eps_c < 1.0 else dp / p1
+        return phi(eps) * math.sqrt(rho1) * valve_flow(1.0, 1.0, eps * p1, reg)
 
     def iec_factor(self, x, dp):
         """Y sqrt(rho_1) g(dp_e) [sqrt(kg/m3) Pa^0.5]: the flow per unit K z_e."""
@@ -314,7 +453,7 @@ class ControlValve(Component):
             dp_e = odd_limit(dp, dp_max, CHOKE_REG_REL * dp_max)
             Y = 1.0
         else:
-            Fg_xT = self.gamma() / 1.4 * P["x_T"]
+            Fg_xT = self.exponent(up) / 1.4 * P["x_T"]
             x_e = odd_limit(dp / p1, Fg_xT, CHOKE_REG_REL * Fg_xT)
             Y = 1.0 - abs(x_e) / (3.0 * Fg_xT)
             dp_e = x_e * p1

@@ -1,4 +1,5 @@
-"""Signal blocks: gain, sum, first-order lag, limiter, rate limiter, table, dead time.
+"""Signal blocks: gain, sum, product, division, first-order lag, limiter, rate limiter,
+table, dead time; sources step, ramp, table and sine.
 
 Each block reads signal inputs (``u``, or ``u1`` .. ``un``) and gives the signal
 output ``y``. Inputs take any unit; the output has the unit of the first input,
@@ -8,6 +9,8 @@ the signal (limits, table values, y0) are plain numbers in SI units.
 
   Gain           y = k u
   Sum            y = bias + w1 u1 + ... + wn un                 (n = n_inputs, 1..4)
+  Product        y = k u1 u2                  [unit of u1 times unit of u2]
+  Division       y = k u1 u2 / (u2^2 + eps^2)  (= k u1/u2 for |u2| >> eps) [u1/u2]
   FirstOrderLag  T dy/dt = k u - y
   Limiter        y = u in [y_min, y_max], y = y_max above, y = y_min below
   RateLimiter    T dy/dt = u - y, its rate held within [-R_down, R_up]
@@ -20,6 +23,28 @@ integrator stops at):
   Step           y = before for t < t0, after for t >= t0
   Ramp           y = start before t0, end after t1, linear between
   TableSource    y = piecewise linear through (times_i, values_i), flat outside
+  Sine           y = offset + amplitude sin(2 pi t/period + phase)   (no jumps)
+
+A Sine has no breakpoints. So that the integrator's step-size control follows the
+wave (the algebraic unknowns are not part of its error test, and a sine that only
+drives algebraic relations, a valve between two boundaries, would otherwise be
+stepped over by steps of a period or more), its output is a differential state
+locked to the wave:
+
+  T_w dy/dt = T_w df/dt + (f(t) - y),   T_w = period/(2 pi),  y(t0) = f(t0)
+
+whose exact solution is y = f(t) (the error e = y - f obeys T_w de/dt = -e: the
+integration error is damped, it does not accumulate over the periods); y is held
+at f(t0) by a steady start (an accumulator). The steps then resolve the wave to
+the run's tolerances (measured in tests/test_product_division_sine.py).
+
+Division's protection near u2 = 0: the Tikhonov-regularised reciprocal
+u2/(u2^2 + eps^2) is smooth, odd and bounded (|y| <= |k u1|/(2 eps)), and equals
+1/u2 to the relative error (eps/u2)^2 (1e-6 at |u2| = 1000 eps). eps [unit of u2]
+is the parameter ``eps`` (default 1e-6): set it well below the divisor's smallest
+meaningful magnitude. A crossing of u2 through zero is a switch ("divisor sign")
+that the integrator locates and logs in the results' events (events.csv), with
+``stop_at_zero = true`` it ends the run there with that message.
 
 Limits are switch functions with modes (as the controller's output limits),
 never clips inside Newton: in each mode the residual is smooth, and the
@@ -51,11 +76,14 @@ n variables).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from dnasim.components.base import Component, Equation, Param, SignalPort, Switch, Variable
 from dnasim.errors import PlantError
 from dnasim.timefunctions import Ramp as _RampFunction
+from dnasim.timefunctions import Sine as _SineFunction
 from dnasim.timefunctions import Step as _StepFunction
 from dnasim.timefunctions import Table as _TableFunction
 
@@ -70,6 +98,9 @@ __all__ = [
     "Step",
     "Ramp",
     "TableSource",
+    "Product",
+    "Division",
+    "Sine",
 ]
 
 
@@ -166,6 +197,166 @@ class Sum(_Block):
                 ),
             )
         ]
+
+
+def _wrapped(unit: str) -> str:
+    """``unit`` as a factor of a product or a quotient: in parentheses when compound."""
+    return unit if all(c.isalnum() or c == "_" for c in unit) else f"({unit})"
+
+
+#: SI units a derived unit is written as when it is one of them ("(kg/s).(J/kg)" -> "W")
+FAMILIAR_UNITS = (
+    "1", "Pa", "K", "kg/s", "J/kg", "W", "J", "kg", "m", "m2", "m3", "s", "1/s", "kg/m3",
+    "m3/s", "m/s", "N", "W/K", "J/K", "J/(kg.K)", "W/m2", "Pa/s", "K/s",
+)  # fmt: skip
+
+
+def _familiar(unit: str) -> str:
+    """``unit``, or the member of FAMILIAR_UNITS with its dimension and scale 1."""
+    from dnasim.units import UnitError, parse_unit
+
+    try:
+        u = parse_unit(unit)
+    except UnitError:
+        return unit
+    if u.scale != 1.0 or u.offset != 0.0:
+        return unit
+    for name in FAMILIAR_UNITS:
+        if parse_unit(name).dims == u.dims:
+            return name
+    return unit
+
+
+def unit_product(a: str, b: str) -> str:
+    """The unit string of a product of quantities in SI units a and b ("*" if either
+    is): "a.b", or a familiar SI unit of that dimension ("(kg/s).(J/kg)" -> "W")."""
+    if "*" in (a, b):
+        return "*"
+    if a == "1":
+        return b
+    if b == "1":
+        return a
+    return _familiar(f"{_wrapped(a)}.{_wrapped(b)}")
+
+
+def unit_quotient(a: str, b: str) -> str:
+    """The unit string of a quotient a/b of SI units ("*" if either is), as
+    ``unit_product`` ("W"/"kg/s" -> "J/kg", "kg/s"/"kg/s" -> "1")."""
+    if "*" in (a, b):
+        return "*"
+    if b == "1":
+        return a
+    if a == b:
+        return "1"
+    return _familiar(f"{_wrapped(a)}/{_wrapped(b)}")
+
+
+class _TwoInputs(_Block):
+    """Base of Product and Division: inputs u1, u2 (any units), output y in the unit the
+    block derives from them (or its ``unit`` parameter)."""
+
+    REGISTER = False
+    SIGNAL_INPUTS = (
+        SignalPort("u1", "*", "first input (any unit)"),
+        SignalPort("u2", "*", "second input (any unit)"),
+    )
+
+    @staticmethod
+    def combine(a: str, b: str) -> str:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def signal_output_unit(self, output, input_units):
+        """y's unit from the units of u1 and u2 (``combine``); "*" until both are known."""
+        unit = self.params.get("unit")
+        if unit is not None:
+            return unit
+        return self.combine(input_units.get("u1", "*"), input_units.get("u2", "*"))
+
+    @property
+    def out_unit(self) -> str:
+        ins = getattr(self, "input_units", {})
+        return self.signal_output_unit("y", ins)
+
+
+class Product(_TwoInputs):
+    """y = k u1 u2.  The unit of y: the unit of u1 times the unit of u2 (k [1]), or the
+    ``unit`` parameter (k then in that unit per unit of u1 u2)."""
+
+    PARAMS = (Param("k", "1", 1.0, "gain [output unit per unit of u1 u2]"), _unit_param())
+    combine = staticmethod(unit_product)
+
+    def equations(self):
+        k = self.params["k"]
+        return [
+            Equation(
+                "product",
+                y=("y", "u1", "u2"),
+                doc="y = k u1 u2",
+                residual=lambda t, x, xp: x["y"] - k * x["u1"] * x["u2"],
+            )
+        ]
+
+    def initial_guess(self, t0, x):
+        x["y"] = self.params["k"] * x["u1"] * x["u2"]
+
+
+class Division(_TwoInputs):
+    """y = k u1 u2/(u2^2 + eps^2): k u1/u2, protected near u2 = 0 (module doc). The unit
+    of y: the unit of u1 over the unit of u2, or the ``unit`` parameter.
+
+    Switch "divisor sign": g = u2 (both directions), located and logged when the
+    divisor crosses zero; with ``stop_at_zero`` the run ends there."""
+
+    PARAMS = (
+        Param("k", "1", 1.0, "gain [output unit per unit of u1/u2]"),
+        Param("eps", "1", 1e-6, "protection of the divisor near 0 [unit of u2]", min=0.0),
+        Param("stop_at_zero", "1", False, "end the run when u2 crosses zero", kind="bool"),
+        _unit_param(),
+    )
+    combine = staticmethod(unit_quotient)
+
+    def setup(self):
+        super().setup()
+        if not self.params["eps"] > 0:
+            raise PlantError(
+                f"component '{self.name}': eps must be > 0 (the divisor's protection near 0)"
+            )
+
+    def quotient(self, u1: float, u2: float) -> float:
+        """k u1 u2/(u2^2 + eps^2) [unit of y]."""
+        eps = self.params["eps"]
+        return self.params["k"] * u1 * u2 / (u2 * u2 + eps * eps)
+
+    def equations(self):
+        return [
+            Equation(
+                "division",
+                y=("y", "u1", "u2"),
+                doc="y = k u1 u2/(u2^2 + eps^2)",
+                residual=lambda t, x, xp: x["y"] - self.quotient(x["u1"], x["u2"]),
+            )
+        ]
+
+    def switches(self):
+        stop = bool(self.params["stop_at_zero"])
+        return [
+            Switch(
+                "divisor sign",
+                lambda t, x, xp: x["u2"],
+                0,
+                None,
+                "the divisor u2 crosses zero",
+                terminal=stop,
+                message=(
+                    (lambda t: f"the divisor u2 of '{self.name}' crossed zero at t = {t:.6g} s")
+                    if stop
+                    else None
+                ),
+            )
+        ]
+
+    def initial_guess(self, t0, x):
+        x["y"] = self.quotient(x["u1"], x["u2"])
 
 
 class FirstOrderLag(_Block):
@@ -584,3 +775,63 @@ class TableSource(_Source):
     def _function(self):
         t, v = _points(self.name, self.params["times"], self.params["values"], "times", "values")
         return _TableFunction(list(t), list(v))
+
+
+class Sine(_Source):
+    """y = offset + amplitude sin(2 pi t/period + phase) (SI units of ``unit``); give
+    ``period`` [s] or ``frequency`` [Hz]. No breakpoints; y is a differential state
+    locked to the wave, T_w dy/dt = T_w df/dt + (f - y), T_w = period/(2 pi) (module
+    doc), so that the step size follows the wave."""
+
+    PARAMS = (
+        Param("amplitude", "1", doc="amplitude [unit of y]"),
+        Param("period", "s", None, "period (or give frequency)", min=0.0),
+        Param("frequency", "Hz", None, "frequency 1/period (or give period)", min=0.0),
+        Param("phase", "rad", 0.0, "phase at t = 0"),
+        Param("offset", "1", 0.0, "mean value [unit of y]"),
+        _source_unit(),
+    )
+
+    def _function(self):
+        P = self.params
+        given = [k for k in ("period", "frequency") if P[k] is not None]
+        if len(given) != 1:
+            raise PlantError(
+                f"component '{self.name}': give exactly one of period and frequency"
+                + (f" (got {' and '.join(given)})" if given else "")
+            )
+        period = P["period"] if P["period"] is not None else 1.0 / P["frequency"]
+        if not (period > 0 and math.isfinite(period)):
+            raise PlantError(f"component '{self.name}': the period must be > 0 s")
+        return _SineFunction(P["offset"], P["amplitude"], period, P["phase"])
+
+    def variables(self):
+        P = self.params
+        nominal = max(abs(P["amplitude"]) + abs(P["offset"]), 1e-300)
+        return [
+            Variable(
+                "y",
+                self.params["unit"],
+                nominal,
+                doc="output (a state locked to the wave)",
+                accumulator=True,
+            )
+        ]
+
+    def equations(self):
+        f = self.function
+        T_w = f.period / (2.0 * math.pi)
+        amp, phase = f.amplitude, f.phase
+
+        def rate(t):  # df/dt
+            return amp / T_w * math.cos(t / T_w + phase)
+
+        return [
+            Equation(
+                "source",
+                y=("y",),
+                yp=("y",),
+                doc="T_w dy/dt = T_w df/dt + (f(t) - y), T_w = period/(2 pi)",
+                residual=lambda t, x, xp: T_w * (xp["y"] - rate(t)) - (f(t) - x["y"]),
+            )
+        ]

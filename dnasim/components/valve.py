@@ -11,7 +11,8 @@ from dnasim.components.base import (
     Variable,
     flow_through_ports,
 )
-from dnasim.components.physics import valve_flow
+from dnasim.components.physics import upwind_mean, valve_flow
+from dnasim.errors import ResidualDomainError
 
 
 class Valve(Component):
@@ -21,6 +22,14 @@ class Valve(Component):
                   (= C z_e sqrt(p_in - p_out) for p_in - p_out >> dp_reg; odd in the
                   pressure difference, so reverse flow gives m < 0; finite slope at 0)
       z_e       = leakage + (1 - leakage) z
+      density   with ``rho_nominal`` given: C -> C sqrt(rho_1/rho_nominal), rho_1 [kg/m3]
+                the density of the upstream state (inside the two-phase dome the
+                homogeneous mixture's; a smooth upwind mean of the two nodes'
+                densities by dp over dp_reg): m = C z_e sqrt(rho_1/rho_nominal) g(dp),
+                the Kv law with the actual inlet density. C is the flow coefficient at
+                the density rho_nominal (e.g. the drain's condensate), and steam or a
+                steam-water mixture passes less mass, by sqrt(rho_1/rho_nominal) (no
+                choking or flashing: see ``DrainValve`` for those)
 
     The mass flow m [kg/s] is the same at both ports (no storage). Throttling is
     isenthalpic in both directions: fluid leaving through the outlet carries the
@@ -62,6 +71,13 @@ class Valve(Component):
         Param(
             "dp_reg", "delta_Pa", 10.0, "regularisation pressure difference near dp = 0", min=0.0
         ),
+        Param(
+            "rho_nominal",
+            "kg/m3",
+            None,
+            "density at which C holds: makes the flow follow the inlet density (drains)",
+            min=0.0,
+        ),
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param("medium", "1", None, "fluid name (default: from the network)", kind="string"),
     )
@@ -73,6 +89,8 @@ class Valve(Component):
 
     def setup(self):
         self.opening_from_signal = self.params["opening"] is None
+        #: the flow follows the upstream density (parameter rho_nominal)
+        self.density_aware = self.params["rho_nominal"] is not None
 
     def fluid_ports(self):
         return flow_through_ports(self.m_eps, "inlet.h")
@@ -90,7 +108,8 @@ class Valve(Component):
                 "flow",
                 y=self.row_reads()[0],
                 unit="kg/s",
-                doc="m = C z_eff sqrt(dp) (regularised near dp = 0)",
+                doc="m = C z_eff sqrt(dp) (regularised near dp = 0)"
+                + (", C times sqrt(rho_1/rho_nominal)" if self.density_aware else ""),
             )
         ]
 
@@ -107,16 +126,35 @@ class Valve(Component):
 
     def row_reads(self):
         """The names ``row_values`` reads (``Component.row_reads``)."""
-        return ("m", "inlet.p", "outlet.p") + (("z",) if self.opening_from_signal else ()), ()
+        z = ("z",) if self.opening_from_signal else ()
+        rho = ("inlet.h", "outlet.h") if self.density_aware else ()
+        return ("m", "inlet.p", "outlet.p") + z + rho, ()
 
     def row_values(self, t, v, vp, modes):
         """The equation of the class doc, its residual [kg/s]:
         flow  m - C z_e (p_in - p_out) / ((p_in - p_out)^2 + dp_reg^2)^(1/4)."""
         m, p_in, p_out = v[0], v[1], v[2]
         z_e = self.effective_opening(t, v[3] if self.opening_from_signal else None)
-        return [m - valve_flow(self.params["C"], z_e, p_in - p_out, self.params["dp_reg"])]
+        C = self.params["C"]
+        if self.density_aware:
+            C *= self.density_factor(p_in, v[-2], p_out, v[-1])
+        return [m - valve_flow(C, z_e, p_in - p_out, self.params["dp_reg"])]
+
+    def density_factor(self, p_in, h_in, p_out, h_out) -> float:
+        """sqrt(rho_1/rho_nominal) [-], rho_1 [kg/m3] the smooth upwind mean of the
+        densities at the inlet (p_in [Pa], h_in [J/kg]) and outlet node by dp."""
+        rho_in = self.medium.state(p_in, h_in).rho
+        rho_out = self.medium.state(p_out, h_out).rho
+        rho1 = float(upwind_mean(p_in - p_out, rho_in, rho_out, self.params["dp_reg"]))
+        return (rho1 / self.params["rho_nominal"]) ** 0.5
 
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
         z = self.opening(t0, x) if not self.opening_from_signal else 0.5
-        x["m"] = valve_flow(self.params["C"], z, dp, self.params["dp_reg"])
+        C = self.params["C"]
+        if self.density_aware:
+            try:
+                C *= self.density_factor(x["inlet.p"], x["inlet.h"], x["outlet.p"], x["outlet.h"])
+            except ResidualDomainError:  # a first guess outside the medium's range: C as given
+                pass
+        x["m"] = valve_flow(C, z, dp, self.params["dp_reg"])

@@ -12,6 +12,11 @@ root; s(h) is concave on an isobar (T rises with h), so a step never overshoots
 by much. A step that leaves the medium's range is halved. When Newton has not
 converged after ``MAX_NEWTON`` steps, scipy's brentq finishes on a bracket.
 
+The isentropic exponent and the ratio of specific heats of a state
+(``isentropic_exponent``, ``heat_capacity_ratio``) from its (p, h) derivatives are
+here too; the valve laws (``dnasim.components.valve_laws``) take the exponent of the
+inlet state from them.
+
 Used by the steam turbine (``dnasim.components.turbine``) for the isentropic
 outlet state h_s = h(p_out, s(p_in, h_in)); with IF97 water the result is checked
 against CoolProp's IF97 backend in ``tests/test_isentropic.py``.
@@ -104,3 +109,37 @@ def _bracketed(medium, p, s, h, st):
         "h_ps",
         f"no state at this pressure has the entropy s = {s:.6g} J/(kg K) within the range",
     )
+
+
+def isentropic_exponent(st) -> float:
+    """Isentropic exponent kappa_s = -(v/p) (dp/dv)_s = rho / (p (d rho/d p)_s) [-] of
+    the state ``st`` (a :class:`~dnasim.media.state.FluidState`), from its (p, h)
+    derivatives: at constant s, dh = v dp, so
+
+        (d rho/d p)_s = (d rho/d p)_h + (d rho/d h)_p / rho                  [s2/m2]
+
+    and kappa_s = rho w^2 / p with w the speed of sound. An ideal gas gives
+    cp/(cp - R); inside the two-phase dome the derivatives are the homogeneous
+    equilibrium mixture's (IF97: the equilibrium speed of sound; saturated steam at
+    10 bar, x = 1: 1.140, cf. Zeuner's 1.035 + 0.1 x); a liquid gives a large value
+    (water at 300 K, 10 bar: 2257). Checked against CoolProp's IF97 speed of sound in
+    ``tests/test_valve_laws.py``."""
+    drho_dp_s = st.drho_dp_h + st.drho_dh_p / st.rho
+    return st.rho / (st.p * drho_dp_s)
+
+
+def heat_capacity_ratio(st) -> float:
+    """Ratio of the specific heats cp/cv [-] of the single-phase state ``st``, as the
+    ratio of the isothermal and the isentropic compressibility (Reech):
+
+        cp/cv = (d rho/d p)_T / (d rho/d p)_s
+        (d rho/d p)_T = (d rho/d p)_h + (d rho/d h)_p (dh/dp)_T,
+        (dh/dp)_T = v - T (dv/dT)_p = 1/rho + T cp (d rho/d h)_p / rho^2      [m3/kg]
+
+    An ideal gas gives cp/(cp - R) = kappa_s. Inside the two-phase dome cp is infinite
+    and the ratio is not defined: NaN."""
+    if not math.isfinite(st.cp):
+        return math.nan
+    drho_dp_s = st.drho_dp_h + st.drho_dh_p / st.rho
+    dh_dp_T = 1.0 / st.rho + st.T * st.cp * st.drho_dh_p / st.rho**2
+    return (st.drho_dp_h + st.drho_dh_p * dh_dp_T) / drho_dp_s
