@@ -927,10 +927,14 @@ def _instance_port(spec: ComponentSpec, method: str, attr: str, name: str):
     return _port(getattr(spec.cls, attr, ()), name)
 
 
-def _plugin_imports(v, path, errors) -> list[str]:
+def _plugin_imports(v, path, errors, allow_import: bool = False) -> list[str]:
     """``[plant] import = ["my_components"]``: import the component modules now
-    (before the component types are looked up), next to the plant file first."""
-    from dnasim.plugins import import_component_modules
+    (before the component types are looked up), next to the plant file first.
+
+    Only with ``allow_import`` (``--allow-import``, ``load(path, allow_import=True)``):
+    importing a module runs its code, and a plant file is data. Without it the
+    modules are named in one problem (how to allow them), and nothing is imported."""
+    from dnasim.plugins import import_component_modules, module_origin
 
     names = [v] if isinstance(v, str) else v
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
@@ -938,6 +942,20 @@ def _plugin_imports(v, path, errors) -> list[str]:
         return []
     p = Path(str(path))
     base = p.parent if p.suffix and p.parent.is_dir() else None
+    if not allow_import:
+        if names:
+            found = ", ".join(f"'{n}' ({module_origin(n, base)})" for n in names)
+            errors.add(
+                ("plant",),
+                "import",
+                f"the plant file asks to import the Python module{'s' if len(names) > 1 else ''} "
+                f"{found}; not imported: importing a module runs its code, and a plant file "
+                "is data that runs no code by itself. If you trust the module, allow it with "
+                "--allow-import (dnasim check/run/sweep --allow-import PLANT.toml; in Python "
+                "dnasim.plantfile.load(path, allow_import=True)), or install it as a plugin "
+                "(entry point group 'dnasim.components'); otherwise remove the key",
+            )
+        return []
     try:
         return import_component_modules(names, base)
     except PlantError as exc:
@@ -945,8 +963,13 @@ def _plugin_imports(v, path, errors) -> list[str]:
         return []
 
 
-def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> PlantSpec:
-    """Validate decoded TOML; every problem becomes part of one ``PlantError``."""
+def parse_plant(
+    data: dict, path: str = "<plant>", text: str | None = None, *, allow_import: bool = False
+) -> PlantSpec:
+    """Validate decoded TOML; every problem becomes part of one ``PlantError``.
+
+    ``allow_import``: import the modules of ``[plant] import`` (they run code);
+    without it such a key is refused, alone, before anything else is read."""
     errors = Problems(str(path), _LineIndex(text) if text is not None else None)
     if not isinstance(data, dict):
         errors.add((), None, "a plant file is a TOML document of tables")
@@ -977,7 +1000,9 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
             if medium is not None:
                 _check_medium(medium, errors, ("plant",), k)
         elif k == "import":
-            imports = _plugin_imports(v, path, errors)
+            imports = _plugin_imports(v, path, errors, allow_import)
+            if not allow_import:
+                errors.raise_if_any()  # one paragraph: nothing of the file is used
         else:
             errors.add(
                 ("plant",),
@@ -1054,22 +1079,25 @@ def _strip_component_prefix(msg: str, name: str) -> str:
     return re.sub(rf"^component '{re.escape(name)}'( \(\w+\))?: ", "", msg)
 
 
-def load(path: str | Path) -> LoadedPlant:
-    """Read, validate and build: the plant, its ``[simulation]`` settings and its spec."""
+def load(path: str | Path, *, allow_import: bool = False) -> LoadedPlant:
+    """Read, validate and build: the plant, its ``[simulation]`` settings and its spec.
+
+    ``allow_import=True`` imports the modules a ``[plant] import`` key names (their
+    code runs); without it such a file is refused with a ``PlantError`` saying so."""
     data, text = read_plant_file(path)
-    spec = parse_plant(data, str(path), text)
+    spec = parse_plant(data, str(path), text, allow_import=allow_import)
     plant = build_plant(spec)
     return LoadedPlant(plant=plant, simulation=spec.simulation, spec=spec, path=str(path))
 
 
-def loads(text: str, path: str = "<string>") -> LoadedPlant:
+def loads(text: str, path: str = "<string>", *, allow_import: bool = False) -> LoadedPlant:
     """Like :func:`load` for TOML text."""
     data = _decode(text, path)
-    spec = parse_plant(data, path, text)
+    spec = parse_plant(data, path, text, allow_import=allow_import)
     return LoadedPlant(plant=build_plant(spec), simulation=spec.simulation, spec=spec, path=path)
 
 
-def load_plant(path: str | Path):
+def load_plant(path: str | Path, *, allow_import: bool = False):
     """The ``Plant`` described by a TOML plant file, the same object the Python API builds.
 
     The file's ``[simulation]`` settings are attached as ``plant.simulation``
@@ -1079,7 +1107,7 @@ def load_plant(path: str | Path):
         res = plant.simulate(plant.simulation.t_end, rtol=1e-6, atol_scaled=1e-8)
         df = res.to_dataframe()
     """
-    return load(path).plant
+    return load(path, allow_import=allow_import).plant
 
 
 def simulate_plant(plant, settings: SimulationSettings | None = None, **overrides):
