@@ -423,7 +423,10 @@ def _run(
     except OutputError as exc:
         raise InputError(str(exc)) from None
     except PlantError as exc:
-        raise InputError(f"{plant_file}: {exc}") from None
+        from dnasim.plantfile import locate_messages
+
+        text = "\n".join(locate_messages(plant_file, str(exc).split("\n")))
+        raise InputError(f"{plant_file}: {text}") from None
     except DnasimError as exc:
         raise InputError(f"{plant_file}: the plant cannot be simulated: {exc}") from None
     except Exception as exc:
@@ -540,8 +543,16 @@ def _check(plant_file, coolprop_cache, allow_import=False):
         if located is not None:
             raise InputError(located) from None
         raise _internal(exc, EXIT_INPUT) from None
+    from dnasim.plantfile import locate_messages, notices
     from dnasim.runner import describe_report
 
+    try:
+        text = Path(plant_file).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        text = None
+    for note in notices(loaded.spec, text):
+        click.echo(f"dnasim: note: {note}", err=True)
+    report.errors = locate_messages(plant_file, report.errors)
     text, ok = describe_report(report)
     click.echo(
         f"{plant_file}: plant '{loaded.spec.name}', {len(loaded.spec.components)} components"

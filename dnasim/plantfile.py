@@ -322,18 +322,67 @@ def read_plant_file(path: str | Path) -> tuple[dict, str]:
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
+        line, col = _byte_line_column(raw, exc.start)
         raise PlantError(
-            f"{path}: not a UTF-8 text file ({exc.reason} at byte {exc.start})"
+            f"{path}, line {line}, column {col}: not a UTF-8 text file (byte "
+            f"0x{raw[exc.start]:02x}: {exc.reason}); save the plant file as UTF-8"
         ) from None
     return _decode(text, str(path)), text
+
+
+def _byte_line_column(raw: bytes, pos: int) -> tuple[int, int]:
+    """Line and column (in characters, both from 1) of byte ``pos`` of ``raw``."""
+    start = raw.rfind(b"\n", 0, pos) + 1
+    return raw.count(b"\n", 0, pos) + 1, len(raw[start:pos].decode("utf-8", "replace")) + 1
+
+
+#: nesting of arrays and inline tables that a plant file never needs
+DEEP_NESTING = 50
+
+
+def _deep_line(text: str, limit: int = DEEP_NESTING) -> int | None:
+    """The line where arrays and inline tables first nest ``limit`` deep (strings
+    and comments skipped), or None."""
+    depth, line, i, n = 0, 1, 0, len(text)
+    while i < n:
+        ch = text[i]
+        if ch == "\n":
+            line += 1
+        elif ch == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        elif ch in "\"'":
+            q = text[i : i + 3] if text[i : i + 3] in ('"""', "'''") else ch
+            j = i + len(q)
+            while j < n and text[j : j + len(q)] != q:
+                if text[j] == "\\" and ch == '"':
+                    j += 1
+                elif text[j] == "\n":
+                    if len(q) == 1:
+                        break
+                    line += 1
+                j += 1
+            i = j + len(q)
+            continue
+        elif ch in "[{":
+            depth += 1
+            if depth >= limit:
+                return line
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+        i += 1
+    return None
 
 
 def _decode(text: str, path: str) -> dict:
     try:
         return tomllib.loads(text)
     except RecursionError:
+        line = _deep_line(text)
+        where = f"{path}, line {line}" if line else path
         raise PlantError(
-            f"{path}: malformed plant file: arrays or tables nested too deeply (a plant file "
+            f"{where}: malformed plant file: arrays or tables nested too deeply (a plant file "
             "needs at most a few levels)"
         ) from None
     except tomllib.TOMLDecodeError as exc:
@@ -668,9 +717,11 @@ def _component(
         try:
             spec.instance = cls(name, **spec.params)
         except PlantError as exc:
-            errors.add(table, None, _strip_component_prefix(str(exc), name))
+            msg = _strip_component_prefix(str(exc), name)
+            errors.add(table, _key_named(msg, table_data), msg)
         except (TypeError, ValueError, KeyError, ArithmeticError) as exc:
-            errors.add(table, None, f"{tname} refused its parameters: {exc}")
+            msg = f"{tname} refused its parameters: {exc}"
+            errors.add(table, _key_named(str(exc), table_data), msg)
         else:
             inst = spec.instance
             fports = _names(inst.fluid_ports()) if hasattr(inst, "fluid_ports") else fports
@@ -714,7 +765,11 @@ def _component(
             errors.add(sub, port, f"invalid node name {node!r}: use letters, digits, '_' and '-'")
             continue
         spec.ports[port] = node
-    for port in fports:
+    # Without a built instance (its parameters are in error) the ports that depend on
+    # parameters are unknown: an "unconnected port" would follow from that error only
+    # (a controller's set_point and track inputs, a mixer's inlets).
+    built = spec.instance is not None
+    for port in fports if built else ():
         if port not in ports:
             errors.add(
                 table,
@@ -778,7 +833,7 @@ def _component(
             )
             continue
         spec.inputs[inp] = src
-    for inp in sin:
+    for inp in sin if built else ():
         if inp not in inputs and None not in signal_units:  # else the broken link says it
             errors.add(
                 table,
@@ -1070,8 +1125,72 @@ def parse_plant(
 # --------------------------------------------------------------------------- building
 
 
+def notices(spec: PlantSpec, text: str | None = None) -> list[str]:
+    """Notes ``dnasim check`` prints about choices that are valid but not physical,
+    located like problems: a pipe with ``internal_energy = "mean"`` (the seed's eq.
+    10.12c: after a step of the inflow the outflow first jumps the other way, and a
+    gas may leave colder than anything in the plant)."""
+    errors = Problems(str(spec.path), _LineIndex(text) if text is not None else None)
+    for c in spec.components:
+        if c.params.get("internal_energy") == "mean":
+            errors.add(
+                ("components", c.name),
+                "internal_energy",
+                'internal_energy = "mean" is the seed\'s U = M (u_in + u_out)/2 '
+                "(eq. 10.12c), kept as its option but not physical: after a step of the "
+                "inflow the outflow first jumps the other way, and a gas may leave colder "
+                'than anything in the plant; "outlet" (the default, a mixed volume) has '
+                "neither artefact",
+            )
+    return errors.items
+
+
+_COMPONENT_MESSAGE = re.compile(
+    r"^(?P<lead>\s*(?:- )?)component '(?P<name>[^']+)'(?: \((?P<type>[\w.]+)\))?"
+    r"(?:, key '(?P<key>[^']+)')?: (?P<rest>.*)$",
+    re.S,
+)
+
+
+def locate_messages(path, messages: Sequence[str]) -> list[str]:
+    """Messages of the later stages (compiler, start) that begin with ``component
+    'NAME' (Type)[, key 'KEY']: ...``, located in the plant file as the file's own
+    problems are: ``plant.toml, [components.NAME], key 'KEY', line N: (Type) ...``.
+    Other messages, and a file that cannot be read, are left as they are."""
+    try:
+        text = Path(str(path)).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return list(messages)
+    lines = _LineIndex(text)
+    out = []
+    for msg in messages:
+        m = _COMPONENT_MESSAGE.match(msg)
+        if m is None:
+            out.append(msg)
+            continue
+        errors = Problems(str(path), lines)
+        kind = f"{m['type']} '{m['name']}': " if m["type"] else ""
+        errors.add(("components", m["name"]), m["key"], kind + m["rest"])
+        out.append(m["lead"] + errors.items[0])
+    return out
+
+
 def _port_example(ports) -> str:
     return ", ".join(f'{q} = "n{i}"' for i, q in enumerate(ports, 1)) or 'inlet = "n1"'
+
+
+def _key_named(msg: str, table_data: dict) -> str | None:
+    """The parameter of the component's table that its own message names first
+    ("z_max must be greater than z_min" -> 'z_max'), for the key and line; None
+    when it names none."""
+    best = None
+    for key in table_data:
+        if key in RESERVED_KEYS or not isinstance(key, str):
+            continue
+        m = re.search(rf"(?<![\w.]){re.escape(key)}(?![\w])", msg)
+        if m and (best is None or m.start() < best[0]):
+            best = (m.start(), key)
+    return best[1] if best else None
 
 
 def _strip_component_prefix(msg: str, name: str) -> str:

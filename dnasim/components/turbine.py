@@ -15,7 +15,7 @@ from dnasim.components.base import (
     shaft_work_equations,
 )
 from dnasim.components.physics import upwind_mean
-from dnasim.errors import PlantError
+from dnasim.errors import PlantError, ResidualDomainError
 from dnasim.media.isentropic import h_isentropic
 
 
@@ -114,9 +114,22 @@ class SteamTurbine(Component):
             P = self.params
             p1, p2 = P["p_in_nominal"], P["p_out_nominal"]
             h1 = P["h_in_nominal"]
-            if h1 is None:
-                h1 = self.medium.h_pT(p1, P["T_in_nominal"])
-            rho1 = self.medium.state(p1, h1).rho
+            key = "h_in_nominal" if h1 is not None else "T_in_nominal"
+            try:
+                if h1 is None:
+                    h1 = self.medium.h_pT(p1, P["T_in_nominal"])
+                rho1 = self.medium.state(p1, h1).rho
+            except ResidualDomainError as exc:  # a parameter's state: it never changes
+                given = (
+                    f"T_in_nominal = {P['T_in_nominal']:.6g} K"
+                    if key == "T_in_nominal"
+                    else f"h_in_nominal = {h1:.6g} J/kg"
+                )
+                raise PlantError(
+                    f"component '{self.name}' (SteamTurbine), key '{key}': the nominal inlet "
+                    f"state (p_in_nominal = {p1 / 1e5:.6g} bar, {given}) is outside the "
+                    f"medium's range: {exc}"
+                ) from None
             self._K_t = P["m_nominal"] / math.sqrt(p1 * rho1 * (1.0 - (p2 / p1) ** 2))
         return self._K_t
 
@@ -178,6 +191,8 @@ class SteamTurbine(Component):
 
     def guess_nodes(self, t0):
         P = self.params
+        if self._K_t is None and self.medium is not None:
+            self.K_t  # noqa: B018 - the nominal point's state, checked before any numerics
         out = {}
         if P["p_in_nominal"] is not None:
             out["inlet"] = (P["p_in_nominal"], None)
