@@ -394,9 +394,10 @@ def spreadsheet_frame(frame):
     ``spreadsheet_safe`` (numbers untouched), for ``to_csv``."""
     out = frame.copy()
     out.columns = [spreadsheet_safe(str(c)) for c in out.columns]
-    for col in out.columns:
-        if out[col].dtype == object:
-            out[col] = [spreadsheet_safe(v) if isinstance(v, str) else v for v in out[col]]
+    for j in range(out.shape[1]):
+        col = out.iloc[:, j]
+        if col.dtype.kind not in "biufcmM":  # text (object or pandas' str dtype)
+            out.iloc[:, j] = [spreadsheet_safe(v) if isinstance(v, str) else v for v in col]
     return out
 
 
