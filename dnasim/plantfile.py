@@ -673,6 +673,7 @@ def _component(
     sout = signal_outputs(cls)
     n0 = len(errors.items)
     unchecked = False
+    unchecked_keys: list[str] = []
     for key, value in table_data.items():
         if key in RESERVED_KEYS:
             continue
@@ -696,6 +697,7 @@ def _component(
             # in the unit of a signal that is not (properly) linked: the broken link is
             # reported by the network check; unit errors here would only follow from it
             unchecked = True
+            unchecked_keys.append(key)
             continue
         spec.params[key] = param_value(value, p, errors, table, key, signal_units, cls)
         if key == "medium" and isinstance(spec.params[key], str):
@@ -727,6 +729,18 @@ def _component(
             fports = _names(inst.fluid_ports()) if hasattr(inst, "fluid_ports") else fports
             sin = _names(inst.signal_inputs()) if hasattr(inst, "signal_inputs") else sin
             sout = _names(inst.signal_outputs()) if hasattr(inst, "signal_outputs") else sout
+    ports_known = spec.instance is not None
+    if len(errors.items) == n0 and unchecked:
+        # parameters in the unit of an unlinked signal: a probe with placeholder values
+        # (1 in any unit) tells which ports the component has; it is not kept
+        try:
+            probe = cls(name, **{**spec.params, **dict.fromkeys(unchecked_keys, 1.0)})
+        except Exception:  # the placeholders do not fit: the class's ports are used
+            probe = None
+        if probe is not None:
+            ports_known = True
+            fports = _names(probe.fluid_ports()) if hasattr(probe, "fluid_ports") else fports
+            sin = _names(probe.signal_inputs()) if hasattr(probe, "signal_inputs") else sin
     spec.fluid_ports, spec.signal_inputs, spec.signal_outputs = fports, sin, sout
     # fluid ports
     ports = table_data.get("ports", {})
@@ -768,7 +782,7 @@ def _component(
     # Without a built instance (its parameters are in error) the ports that depend on
     # parameters are unknown: an "unconnected port" would follow from that error only
     # (a controller's set_point and track inputs, a mixer's inlets).
-    built = spec.instance is not None
+    built = ports_known
     for port in fports if built else ():
         if port not in ports:
             errors.add(

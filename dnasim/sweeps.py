@@ -306,10 +306,8 @@ def plant_fingerprint(spec) -> str:
     plant's medium and modules, and the ``[simulation]`` settings (with the sweep's
     output interval). The file's path, the plant's name and description are left
     out (a moved or renamed file is the same plant)."""
-    from dnasim import __version__
-
     data = {
-        "dnasim": __version__,
+        "dnasim": _version(),
         "medium": spec.medium,
         "imports": list(spec.imports),
         "simulation": _plain(asdict(spec.simulation)),
@@ -326,6 +324,15 @@ def plant_fingerprint(spec) -> str:
     }
     text = json.dumps(data, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("dnasim")
+    except PackageNotFoundError:
+        return "unknown"
 
 
 #: statuses of a case that a restarted sweep runs again (the others are final)
