@@ -144,7 +144,8 @@ def mutate(data: dict, rnd: random.Random) -> str:
         elif op == 6 and isinstance(parent, dict) and isinstance(value, dict | int | float | str):
             parent[str(key) + "_copy"] = copy.deepcopy(value)  # a duplicated component/key
         elif op == 7 and rnd.random() < 0.5:  # another medium: for the plant, or one component
-            tables = [data.get("plant")] + list((data.get("components") or {}).values())
+            comps = data.get("components")
+            tables = [data.get("plant")] + (list(comps.values()) if isinstance(comps, dict) else [])
             table = rnd.choice([t for t in tables if isinstance(t, dict)] or [{}])
             table["medium"] = rnd.choice(MEDIA)
         elif op == 7 and rnd.random() < 0.3 and isinstance(data.get("plant"), dict):
