@@ -279,7 +279,9 @@ def classify(
         signal.setitimer(signal.ITIMER_PROF, 0)
         signal.signal(signal.SIGPROF, old)
     out = res.output
-    ran = [n for n in range(3) if os.path.exists(os.path.join(workdir, MODULE.format(n=n) + ".ran"))]
+    ran = [
+        n for n in range(3) if os.path.exists(os.path.join(workdir, MODULE.format(n=n) + ".ran"))
+    ]
     if ran and "--allow-import" not in options:
         return "internal", f"a plant file ran code without --allow-import\n{out}"
     if isinstance(res.exception, _Hang):

@@ -791,8 +791,7 @@ def sweep_cmd(
                 client = Client(address, timeout=10)
             except Exception as exc:  # refused, timed out, a scheme dask cannot use
                 raise InputError(
-                    f"option --scheduler: cannot connect to {address}: {type(exc).__name__}: "
-                    f"{exc}"
+                    f"option --scheduler: cannot connect to {address}: {type(exc).__name__}: {exc}"
                 ) from None
             executor = client.get_executor()
         else:
@@ -886,9 +885,8 @@ def _scheduler_address(text: str) -> str:
         scheme, rest = "tcp", raw
     scheme = scheme.lower()
     if scheme not in SCHEDULER_SCHEMES:
-        raise bad(
-            f"the scheme '{scheme}://' is not one of {', '.join(s + '://' for s in SCHEDULER_SCHEMES)}"
-        )
+        known = ", ".join(f"{x}://" for x in SCHEDULER_SCHEMES)
+        raise bad(f"the scheme '{scheme}://' is not one of {known}")
     if not rest or any(c in rest for c in "/?#@ \t"):
         raise bad("no host and port, or a path, user or query in it")
     if rest.startswith("["):

@@ -342,7 +342,7 @@ def _medium_problems(plant) -> list[str]:
                 f"component '{name}' ({kind}), key '{param}': the medium "
                 f"{getattr(medium, 'label', medium)} has no two-phase region, but a {kind} "
                 f"holds saturated liquid and vapour{side} and needs a two-phase (condensable) "
-                f"medium such as \"Water\"; give the component {param} = \"Water\" or change "
+                f'medium such as "Water"; give the component {param} = "Water" or change '
                 "the plant's medium"
             )
     return out

@@ -35,7 +35,8 @@ How it works:
   the end both are rebuilt from the folders of all cases (``collect``), in memory
   first and then written atomically: a file that does not fit (full disk, file
   size limit) leaves neither file, no temporary file, and an
-  :class:`~dnasim.errors.OutputError` naming the file and the cases that are safe. ``sweep.nc`` (h5netcdf) holds every output over
+  :class:`~dnasim.errors.OutputError` naming the file and the cases that are safe.
+  ``sweep.nc`` (h5netcdf) holds every output over
   (case, time): each case's rows interpolated linearly to one time grid
   (``output_interval`` [s], else the plant's, else 501 points from t_start to
   the largest t_end); NaN outside the times a case reached. At a restart (two rows
@@ -123,7 +124,7 @@ def run_case(spec, case: dict, index: int = 0) -> dict:
     Returns a dict: index, case, status ("finished", "failed", "interrupted",
     "input-error", "error"), message, t_end and t_reached [s], steps, events,
     wall_time [s], stats (solver counters) and files (file name -> bytes)."""
-    global _in_case
+    global _case_tmp
     t_start = time.perf_counter()
     rec: dict[str, Any] = {
         "index": index,
@@ -137,14 +138,12 @@ def run_case(spec, case: dict, index: int = 0) -> dict:
         "stats": {},
         "files": {},
     }
-    _in_case = True
-    try:
-        with tempfile.TemporaryDirectory(prefix="dnasim-case-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="dnasim-case-") as tmp:
+        _case_tmp = tmp  # removed by a local worker that stops (``_exit_worker``)
+        try:
             _run_case_in(spec, case, rec, tmp)
-    except _ParentGone:  # a local worker whose sweep is gone: its temporary files removed
-        os._exit(1)
-    finally:
-        _in_case = False
+        finally:
+            _case_tmp = None
     rec["wall_time"] = time.perf_counter() - t_start
     return rec
 
@@ -175,9 +174,7 @@ def _run_case_in(spec, case, rec, tmp) -> None:
         rec["message"] = rec["message"].replace(str(Path(tmp)) + os.sep, "")
         rec["t_reached"] = outcome.t_reached
         rec["steps"], rec["events"] = outcome.n_steps, outcome.n_events
-        rec["stats"] = {
-            k: v for k, v in outcome.stats.items() if isinstance(v, int | float | str)
-        }
+        rec["stats"] = {k: v for k, v in outcome.stats.items() if isinstance(v, int | float | str)}
     for name in CASE_FILES:
         p = Path(tmp) / name
         if p.exists():
@@ -186,30 +183,31 @@ def _run_case_in(spec, case, rec, tmp) -> None:
 
 # --------------------------------------------------------------------------- local workers
 
-#: True while ``run_case`` runs in this process (a worker's SIGTERM then unwinds it)
-_in_case = False
+#: the temporary directory of the case ``run_case`` runs in this process, or None
+_case_tmp: str | None = None
 
 
-class _ParentGone(BaseException):
-    """Raised in a local worker by SIGTERM while it runs a case: the case's temporary
-    directory is removed on the way out, then the worker exits."""
+def _exit_worker() -> None:
+    """Stop a local worker at once: its case's temporary directory removed first (the
+    solver may be anywhere; nothing of the case is kept), then ``os._exit``."""
+    tmp = _case_tmp
+    if tmp is not None:
+        import shutil
+
+        shutil.rmtree(tmp, ignore_errors=True)
+    os._exit(1)
 
 
 def _worker_sigterm(signum, frame):
-    if _in_case:
-        raise _ParentGone()
-    os._exit(1)
+    _exit_worker()
 
 
 def _watch_parent(parent_pid: int) -> None:
     """A local worker's thread: when the sweep's process is gone (the worker was
-    handed to another parent), stop the worker: SIGTERM to itself (the case's
-    temporary files are removed), and after 5 s at the latest ``os._exit``."""
+    handed to another parent), stop the worker (``_exit_worker``)."""
     while os.getppid() == parent_pid:
         time.sleep(PARENT_POLL_SECONDS)
-    os.kill(os.getpid(), signal.SIGTERM)
-    time.sleep(5.0)
-    os._exit(1)
+    _exit_worker()
 
 
 def _worker_init(parent_pid: int) -> None:
@@ -252,7 +250,7 @@ class LocalPool(cf.ProcessPoolExecutor):
         )
 
     def terminate_workers(self) -> None:
-        """SIGTERM to every worker (each removes its case's temporary files and exits):
+        """SIGTERM to every worker (each removes its case's temporary directory and exits):
         after an interrupt or an output error, so that ``shutdown`` does not wait for
         the cases still running."""
         for proc in list((getattr(self, "_processes", None) or {}).values()):
@@ -800,7 +798,6 @@ def collect(spec, cases, out_dir, *, output_interval=None, fingerprint=None):
     # fails in our own write (OutputError), never inside HDF5
     nc_bytes = _netcdf_bytes(ds)
     _atomic_write(out / "sweep.nc", lambda f: f.write(nc_bytes))
-    del nc_bytes
     try:
         _atomic_write(out / "summary.csv", lambda f: f.write(summary_bytes))
     except OutputError:

@@ -30,8 +30,10 @@ from dnasim.output import read_results_csv, write_events_csv
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANTS = ROOT / "plants"
-LAG = (ROOT / "tests" / "plants" / "lag_sensor.toml").read_text().replace(
-    't_end = "60 s"', 't_end = "20 s"'
+LAG = (
+    (ROOT / "tests" / "plants" / "lag_sensor.toml")
+    .read_text()
+    .replace('t_end = "60 s"', 't_end = "20 s"')
 )
 DNASIM = [sys.executable, "-m", "dnasim.cli"]
 
@@ -171,12 +173,15 @@ def test_sigkill_of_a_sweep_leaves_no_process_of_its_group(tmp_path):
     # long cases (max_step 1 ms over 1000 s): both workers are busy when the sweep dies
     text = LAG.replace('t_end = "20 s"', 't_end = "1000 s"\nmax_step = "0.001 s"')
     path = plant(tmp_path, text)
+    temp = tmp_path / "temp"  # the workers' temporary case directories
+    temp.mkdir()
     proc = subprocess.Popen(
         [*DNASIM, "sweep", path, "-o", tmp_path / "sw", "--set", "sensor.tau=4,5,6", "-j", "2"],
         start_new_session=True,  # its own process group, as a shell job or a CI step
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         cwd=tmp_path,
+        env={**os.environ, "TMPDIR": str(temp)},
     )
     try:
         deadline = time.monotonic() + 120
@@ -195,6 +200,8 @@ def test_sigkill_of_a_sweep_leaves_no_process_of_its_group(tmp_path):
         assert _group(proc.pid) == []
         # nobody holds the sweep's stdout open: reading it ends
         assert proc.stdout.read() == b""
+        # the workers removed their cases' temporary directories on the way out
+        assert list(temp.glob("dnasim-case-*")) == []
     finally:
         for pid, _ in _group(proc.pid):
             os.kill(pid, signal.SIGKILL)
@@ -322,7 +329,9 @@ def test_sweep_output_size_is_refused_up_front_as_in_run(tmp_path):
 )
 def test_scheduler_addresses_are_checked(tmp_path, address, words):
     path = plant(tmp_path, LAG)
-    res = invoke("sweep", path, "-o", tmp_path / "sw", "--set", "sensor.tau=4", "--scheduler", address)
+    res = invoke(
+        "sweep", path, "-o", tmp_path / "sw", "--set", "sensor.tau=4", "--scheduler", address
+    )
     assert_located(res, "option --scheduler", words)
     assert res.output.count("dnasim: error") == 1
 
@@ -333,7 +342,7 @@ def test_scheduler_addresses_are_checked(tmp_path, address, words):
 def test_every_csv_cell_is_safe_for_spreadsheets(tmp_path):
     from dnasim.output import spreadsheet_safe
 
-    assert spreadsheet_safe("=HYPERLINK(\"http://x\")") == "'=HYPERLINK(\"http://x\")"
+    assert spreadsheet_safe('=HYPERLINK("http://x")') == '\'=HYPERLINK("http://x")'
     for text in ("@SUM(A1)", "+cmd", "-cmd", "\tx", "\rx"):
         assert spreadsheet_safe(text) == "'" + text
     for number in ("-1.5", "+2e5", "-inf", "nan", "0.25", "-1e-300"):
@@ -345,7 +354,11 @@ def test_every_csv_cell_is_safe_for_spreadsheets(tmp_path):
     res = invoke("sweep", path, "-o", tmp_path / "sw", "--cases", cases, "-j", "1")
     assert res.exit_code == 1, res.output  # both cases refuse their medium (or tau)
     text = (tmp_path / "sw" / "summary.csv").read_text()
-    cells = [c for line in text.splitlines() for c in re.split(r",(?=(?:[^\"]*\"[^\"]*\")*[^\"]*$)", line)]
+    cells = [
+        c
+        for line in text.splitlines()
+        for c in re.split(r",(?=(?:[^\"]*\"[^\"]*\")*[^\"]*$)", line)
+    ]
     assert not any(c.lstrip('"').startswith(("=", "@")) for c in cells), text
     assert "'@SUM(A1)" in text and "'=HYPERLINK" in text
     assert ",-1.5," in text  # the number is a number
@@ -369,7 +382,7 @@ def test_malformed_files_are_located_by_line(tmp_path):
     assert_located(res, "deep.toml, line 21", "nested too deeply")
     raw = text.encode()
     i = raw.index(b"[components.steam]")
-    bad = raw[:i] + b'# caf\xe9\n' + raw[i:]
+    bad = raw[:i] + b"# caf\xe9\n" + raw[i:]
     (tmp_path / "latin1.toml").write_bytes(bad)
     line = raw[:i].count(b"\n") + 1
     res = invoke("check", tmp_path / "latin1.toml")
@@ -434,7 +447,9 @@ def test_a_vessel_smaller_than_the_water_its_start_puts_in_it_is_refused(tmp_pat
     """feedwater_heater: the level PI holds 2.5 m over A = 12 m2 at the steady start,
     30 m3 of water; in a 20 m3 tank that is above its top (1.67 m)."""
     text = (PLANTS / "feedwater_heater.toml").read_text()
-    small = text.replace('V_t = "60 m3"', 'V_t = "20 m3"').replace('V_l0 = "30 m3"', 'V_l0 = "10 m3"')
+    small = text.replace('V_t = "60 m3"', 'V_t = "20 m3"').replace(
+        'V_l0 = "30 m3"', 'V_l0 = "10 m3"'
+    )
     assert small != text
     res = invoke("check", plant(tmp_path, small))
     assert_located(res, "[components.level_pi]", "key 'setpoint'", "deaerator", "1.66667 m")
@@ -444,7 +459,10 @@ def test_a_vessel_smaller_than_the_water_its_start_puts_in_it_is_refused(tmp_pat
 
 @pytest.mark.parametrize(
     "source, component",
-    [("feedwater_heater.toml", "deaerator"), ("../tests/plants/condenser_level_control.toml", "condenser")],
+    [
+        ("feedwater_heater.toml", "deaerator"),
+        ("../tests/plants/condenser_level_control.toml", "condenser"),
+    ],
 )
 def test_two_phase_vessels_refuse_a_gas(tmp_path, source, component):
     text = (PLANTS / source).read_text().replace('medium = "Water"', 'medium = "Air"', 1)

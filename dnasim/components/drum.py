@@ -98,7 +98,12 @@ class _SaturatedVessel(Component):
         if name == "V_l":
             return 0.0, V_t, "m3", f"the vessel's volume V_t = {V_t:.6g} m3"
         if name == "level":
-            return 0.0, V_t / A, "m", f"its top, V_t/A = {V_t:.6g} m3 / {A:.6g} m2 = {V_t / A:.6g} m"
+            return (
+                0.0,
+                V_t / A,
+                "m",
+                f"its top, V_t/A = {V_t:.6g} m3 / {A:.6g} m2 = {V_t / A:.6g} m",
+            )
         return None
 
     COMMON_PARAMS = (
