@@ -2,9 +2,14 @@
 
 Each case takes one plant of plants/*.toml, applies one to three random mutations
 (delete a key, duplicate a line, a value of the wrong type, a wrong or garbled
-unit, an extreme number, a dangling node or signal name, an unknown key or type)
-and runs ``dnasim check`` on it, or, for a sample, ``dnasim run`` with a tiny
-end time. The command runs in-process (click's CliRunner), under an alarm.
+unit, an extreme number, a dangling node or signal name, an unknown key or
+another component type of the library, a gas where a drum needs water, a
+``[plant] import`` of a module next to the file, bytes that are not UTF-8) and
+runs ``dnasim check`` on it, or, for a sample, ``dnasim run`` with a tiny end time
+or ``dnasim sweep`` with fuzzed options (``--set`` values, a cases file with bad
+bytes, duplicate columns or long cells, ``--output-interval``, ``--scheduler``
+addresses, ``--allow-import``). The command runs in-process (click's CliRunner),
+under an alarm.
 Outcomes:
 
     clean      exit 0
@@ -58,6 +63,21 @@ NUMBERS = [
     1000000, 100000, 1.5, math.inf, -math.inf, math.nan,
 ]  # fmt: skip
 WRONG = [True, False, [], [1, 2], {}, {"type": "step"}, "", "abc", "1e-300 s", "5000 degC"]
+#: component types a mutation may put in place of another: the whole library
+TYPES = [
+    "Attemperator", "CheckValve", "Condenser", "ControlValve", "DeadTime", "Drum",
+    "EnthalpySensor", "FeedwaterTank", "FirstOrderLag", "Gain", "HeatExchanger",
+    "LevelSensor", "Limiter", "MassFlowBoundary", "MassFlowSensor", "Mixer",
+    "PIController", "PIDController", "Pipe", "PressureBoundary", "PressureSensor", "Pump",
+    "QualitySensor", "Ramp", "RateLimiter", "Splitter", "SteamTurbine", "Step", "Sum",
+    "Table", "TableSource", "TemperatureSensor", "Valve", "X",
+]  # fmt: skip
+#: media, among them gases where a drum, a tank or a condenser needs a condensable one
+MEDIA = ["Water", "Air", "FlueGas", "Nitrogen", "IF97::Water", "HEOS::Water", "Steam", "x"]
+#: a module a plant file may ask to import (written next to it): it must never run
+#: without --allow-import; with it, it only leaves a marker file
+MODULE = "fuzz_module_{n}"
+MODULE_TEXT = "from pathlib import Path\nPath(__file__).with_suffix('.ran').write_text('ran')\n"
 
 
 # --------------------------------------------------------------------------- mutations
@@ -120,11 +140,18 @@ def mutate(data: dict, rnd: random.Random) -> str:
                 _new_value(value, rnd)
             )
         elif op == 5 and isinstance(value, dict) and "type" in value:  # another type
-            value["type"] = rnd.choice(["Pipe", "Valve", "Mixer", "Splitter", "PIController", "X"])
+            value["type"] = rnd.choice(TYPES)
         elif op == 6 and isinstance(parent, dict) and isinstance(value, dict | int | float | str):
             parent[str(key) + "_copy"] = copy.deepcopy(value)  # a duplicated component/key
+        elif op == 7 and rnd.random() < 0.5:  # another medium: for the plant, or one component
+            comps = data.get("components")
+            tables = [data.get("plant")] + (list(comps.values()) if isinstance(comps, dict) else [])
+            table = rnd.choice([t for t in tables if isinstance(t, dict)] or [{}])
+            table["medium"] = rnd.choice(MEDIA)
+        elif op == 7 and rnd.random() < 0.3 and isinstance(data.get("plant"), dict):
+            data["plant"]["import"] = [MODULE.format(n=rnd.randrange(3))]  # code next to it
         else:
-            text_ops.append(rnd.choices((0, 1, 2), weights=(9, 9, 2))[0])
+            text_ops.append(rnd.choices((0, 1, 2, 3), weights=(9, 9, 2, 1))[0])
     try:
         text = tomli_w.dumps(data)
     except (TypeError, ValueError):  # e.g. an empty key
@@ -138,8 +165,10 @@ def mutate(data: dict, rnd: random.Random) -> str:
             lines.insert(i, lines[i])
         elif op == 1:  # a deleted line
             del lines[i]
-        else:  # deep nesting
+        elif op == 2:  # deep nesting
             lines.insert(i, "deep = " + "[" * 1000 + "]" * 1000)
+        else:  # a byte that is not UTF-8 (latin-1 text; decoded back by ``classify``)
+            lines.insert(i, "# caf\udce9")
     return "\n".join(lines) + "\n"
 
 
@@ -158,19 +187,86 @@ def _alarm(signum, frame):
     raise _Hang()
 
 
-def classify(command: str, text: str, workdir: str, timeout: float = 60.0) -> tuple[str, str]:
-    """Run ``dnasim check`` or ``dnasim run`` (t_end 0.5 s) on ``text``; returns
-    (outcome, output)."""
+#: sweep options: keys (some wrong), --output-interval values, scheduler addresses that
+#: are refused before any connection (a valid one would wait for a cluster)
+SWEEP_KEYS = ["simulation.t_end", "simulation.rtol", "simulation.output_interval", "x.y", "a"]
+INTERVALS = ["0.1 s", "1e-9", "-1", "0", "abc", "1e300", "0.5 bar", "nan"]
+SCHEDULERS = [
+    "file:///etc/passwd", "http://127.0.0.1:8786", "inproc://x", "ucx://h:1", "tcp://[::1",
+    "tcp://" + "h" * 300 + ":8786", "tcp://127.0.0.1", "tcp://127.0.0.1:0", "tcp://a b:1", "",
+]  # fmt: skip
+CASES_FILES = [
+    b"simulation.t_end\n0.3\n0.5\n",
+    b"simulation.t_end,simulation.t_end\n0.3,0.4\n",
+    b"simulation.t_end\n0.3 \xb5s\n",
+    b'simulation.t_end\n"' + b"9" * 140_000 + b'"\n',
+    b"simulation.t_end\n0.3\x00\n",
+    b"\xef\xbb\xbfsimulation.t_end [s]\n0.4\n",
+    b'[[case]]\n"simulation.t_end" = 0.3\nsimulation = { t_end = 0.4 }\n',
+    b"[[case]]\nsimulation.t_end = 0.3\n",
+    b"=HYPERLINK(1)\n1\n",
+]
+
+
+def sweep_options(rnd: random.Random, workdir: str) -> list[str]:
+    """Random options of ``dnasim sweep`` (always one local process, -j 1)."""
+    args = ["-j", "1"]
+    if rnd.random() < 0.5:
+        name = "cases.toml" if rnd.random() < 0.2 else "cases.csv"
+        path = os.path.join(workdir, name)
+        with open(path, "wb") as f:
+            f.write(rnd.choice(CASES_FILES))
+        args += ["--cases", path]
+    else:
+        key = rnd.choice(SWEEP_KEYS)
+        values = rnd.choice(["0.3,0.5", "0.4", "", "1e-9", "=cmd", "0.3 s,0.3 s", "[[[[1]]]]"])
+        args += ["--set", f"{key}={values}"]
+        if rnd.random() < 0.1:
+            args += ["--set", f"{key}=0.4"]  # a key given twice
+        if key != "simulation.t_end":  # short runs
+            args += ["--set", "simulation.t_end=0.4"]
+    if rnd.random() < 0.3:
+        args += ["--output-interval", rnd.choice(INTERVALS)]
+    if rnd.random() < 0.2:
+        args += ["--scheduler", rnd.choice(SCHEDULERS)]
+    if rnd.random() < 0.2:
+        args.append("--allow-import")
+    return args
+
+
+def classify(
+    command: str,
+    text: str,
+    workdir: str,
+    timeout: float = 60.0,
+    options: list[str] | None = None,
+) -> tuple[str, str]:
+    """Run ``dnasim check``, ``dnasim run`` (t_end 0.5 s) or ``dnasim sweep`` (with
+    ``options``, see :func:`sweep_options`) on ``text``; returns (outcome, output).
+    A ``[plant] import`` module is written next to the file; it must not run unless
+    the command was given ``--allow-import`` (else the outcome is "internal")."""
     from click.testing import CliRunner
 
     from dnasim.cli import main
 
     path = os.path.join(workdir, "fuzz.toml")
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(text)
+    with open(path, "w", encoding="utf-8", errors="surrogateescape") as f:
+        f.write(text)  # "\udce9" (a lone surrogate) becomes the byte 0xe9: not UTF-8
+    for n in range(3):
+        module = os.path.join(workdir, MODULE.format(n=n))
+        with open(module + ".py", "w", encoding="utf-8") as f:
+            f.write(MODULE_TEXT)
+        if os.path.exists(module + ".ran"):
+            os.unlink(module + ".ran")
+        sys.modules.pop(MODULE.format(n=n), None)
+    options = list(options or [])
     args = [command, path]
     if command == "run":
         args += ["-o", os.path.join(workdir, "out"), "-q", "--t-end", "0.5 s"]
+    elif command == "sweep":
+        args += ["-o", os.path.join(workdir, "sweep"), "-q", *options]
+    if "--allow-import" in options and command != "sweep":
+        args.append("--allow-import")
     # the limit is on CPU time (ITIMER_PROF), not wall time: on a loaded machine at
     # nice 19 a case that needs 2 s of CPU may take a minute of wall time
     old = signal.signal(signal.SIGPROF, _alarm)
@@ -183,6 +279,11 @@ def classify(command: str, text: str, workdir: str, timeout: float = 60.0) -> tu
         signal.setitimer(signal.ITIMER_PROF, 0)
         signal.signal(signal.SIGPROF, old)
     out = res.output
+    ran = [
+        n for n in range(3) if os.path.exists(os.path.join(workdir, MODULE.format(n=n) + ".ran"))
+    ]
+    if ran and "--allow-import" not in options:
+        return "internal", f"a plant file ran code without --allow-import\n{out}"
     if isinstance(res.exception, _Hang):
         return "hang", out
     if res.exception is not None and not isinstance(res.exception, SystemExit):
@@ -200,12 +301,16 @@ def classify(command: str, text: str, workdir: str, timeout: float = 60.0) -> tu
     return "unlocated", out
 
 
-def _case(seed: int, run_fraction: float, bases) -> tuple[str, str]:
+def _case(seed: int, run_fraction: float, bases, workdir: str) -> tuple[str, str, list]:
     rnd = random.Random(seed)
     _, data = bases[rnd.randrange(len(bases))]
     text = mutate(data, rnd)
-    command = "run" if rnd.random() < run_fraction else "check"
-    return command, text
+    x = rnd.random()
+    command = "run" if x < run_fraction else "sweep" if x < 1.5 * run_fraction else "check"
+    options = sweep_options(rnd, workdir) if command == "sweep" else []
+    if command != "sweep" and rnd.random() < 0.05:
+        options = ["--allow-import"]
+    return command, text, options
 
 
 def _chunk(args) -> list[tuple[int, str, str, str]]:
@@ -217,8 +322,8 @@ def _chunk(args) -> list[tuple[int, str, str, str]]:
     out = []
     with tempfile.TemporaryDirectory() as tmp:
         for seed in seeds:
-            command, text = _case(seed, run_fraction, bases)
-            outcome, msg = classify(command, text, tmp, timeout)
+            command, text, options = _case(seed, run_fraction, bases, tmp)
+            outcome, msg = classify(command, text, tmp, timeout, options)
             out.append((seed, command, outcome, msg.strip().splitlines()[-1][:300] if msg else ""))
     return out
 
@@ -227,7 +332,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--n", type=int, default=10_000, help="number of mutated plants")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes")
-    ap.add_argument("--run-fraction", type=float, default=0.05, help="share run, not check")
+    ap.add_argument(
+        "--run-fraction",
+        type=float,
+        default=0.05,
+        help="share run, not check (and half as many sweep)",
+    )
     ap.add_argument("--timeout", type=float, default=60.0, help="CPU seconds before a hang")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--chunk", type=int, default=100, help="cases per task (the tally's step)")
@@ -284,7 +394,8 @@ def main(argv=None) -> int:
         for seed, command, msg in items[: args.show]:
             print(f"  seed {seed} ({command}): {msg}")
     print(
-        f"{sum(tally.values())} mutated plants ({commands['check']} check, {commands['run']} run) "
+        f"{sum(tally.values())} mutated plants ({commands['check']} check, {commands['run']} run, "
+        f"{commands['sweep']} sweep) "
         f"in {wall:.0f} s with {args.jobs} processes"
     )
     print(" / ".join(f"{o} {tally[o]}" for o in OUTCOMES))

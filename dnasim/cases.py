@@ -73,7 +73,7 @@ def parse_value(text: str) -> Any:
     text = text.strip()
     try:
         return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         return text
 
 
@@ -122,38 +122,106 @@ def product_cases(values: dict[str, list]) -> list[dict[str, Any]]:
     return [dict(zip(keys, combo, strict=True)) for combo in itertools.product(*values.values())]
 
 
+#: largest cases file read [bytes] (a million cases of a few values fit); larger
+#: files, and endless ones such as /dev/zero, are refused after this many bytes
+MAX_CASES_FILE_BYTES = 64 * 2**20
+#: largest cell of a cases CSV [characters] (Python's csv module's limit)
+MAX_CELL_CHARS = 128 * 1024
+
+
 def read_cases(path: str | Path) -> list[dict[str, Any]]:
-    """Cases from a CSV or TOML file (by its suffix; see the module docstring)."""
+    """Cases from a CSV or TOML file (by its suffix; see the module docstring).
+
+    The file must be UTF-8 text of at most ``MAX_CASES_FILE_BYTES`` (a bad byte is
+    reported with its line and column; a longer file is refused without reading
+    it whole), with cells of at most ``MAX_CELL_CHARS``; a column given twice is
+    refused, as ``--set`` refuses a key given twice."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(path, "rb") as f:
+            raw = f.read(MAX_CASES_FILE_BYTES + 1)
     except OSError as exc:
         raise CaseError(f"{path}: cannot read the cases file: {exc.strerror or exc}") from None
+    if len(raw) > MAX_CASES_FILE_BYTES:
+        raise CaseError(
+            f"{path}: the cases file is larger than {MAX_CASES_FILE_BYTES // 2**20} MB; "
+            "split the sweep into several files"
+        )
+    text = decode_text(raw, path)
+    if "\x00" in text:
+        line, col = _line_column(text, text.index("\x00"))
+        raise CaseError(f"{path}, line {line}, column {col}: a NUL character; not a text file")
     if path.suffix.lower() == ".toml":
         return _toml_cases(text, path)
     return _csv_cases(text, path)
 
 
+def decode_text(raw: bytes, path) -> str:
+    """``raw`` as UTF-8 text (a byte-order mark dropped); raises ``CaseError`` with the
+    line and column of the first byte that is not UTF-8."""
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        start = exc.start
+        line = raw.count(b"\n", 0, start) + 1
+        col = len(raw[raw.rfind(b"\n", 0, start) + 1 : start].decode("utf-8", "replace")) + 1
+        raise CaseError(
+            f"{path}, line {line}, column {col}: not UTF-8 text (byte 0x{raw[start]:02x}, "
+            f"{exc.reason}); save the file as UTF-8"
+        ) from None
+
+
+def _line_column(text: str, pos: int) -> tuple[int, int]:
+    return text.count("\n", 0, pos) + 1, pos - (text.rfind("\n", 0, pos) + 1) + 1
+
+
 _HEADER_UNIT = re.compile(r"^(.*?)\s*\[([^\[\]]*)\]\s*$")
 
 
+def _csv_rows(text: str, path: Path) -> list[tuple[int, list[str]]]:
+    """(line number, cells) of every row that is not empty; raises ``CaseError`` for a
+    cell over ``MAX_CELL_CHARS`` or a malformed row, with its line."""
+    lines = text.splitlines()
+    for i, line in enumerate(lines, start=1):
+        if len(line) > MAX_CELL_CHARS:
+            raise CaseError(
+                f"{path}, line {i}: a line of {len(line)} characters, above the limit of "
+                f"{MAX_CELL_CHARS} for a cases file"
+            )
+    reader = csv.reader(lines)
+    rows = []
+    try:
+        for row in reader:
+            if any(c.strip() for c in row):
+                rows.append((reader.line_num, row))
+    except csv.Error as exc:
+        raise CaseError(f"{path}, line {reader.line_num}: malformed CSV: {exc}") from None
+    return rows
+
+
 def _csv_cases(text: str, path: Path) -> list[dict[str, Any]]:
-    rows = [r for r in csv.reader(text.splitlines()) if any(c.strip() for c in r)]
-    if not rows:
+    numbered = _csv_rows(text, path)
+    if not numbered:
         raise CaseError(f"{path}: no header row (COMPONENT.PARAMETER columns)")
+    head_line, head = numbered[0]
     keys, units = [], []
-    for j, h in enumerate(rows[0]):
+    for j, h in enumerate(head):
         m = _HEADER_UNIT.match(h.strip())
         key, unit = (m.group(1), m.group(2)) if m else (h.strip(), "")
         if not _KEY_RE.match(key):
             raise CaseError(
-                f"{path}, line 1, column {j + 1}: expected COMPONENT.PARAMETER "
+                f"{path}, line {head_line}, column {j + 1}: expected COMPONENT.PARAMETER "
                 f"(optionally with a unit, 'steam.T [degC]'), got {h!r}"
+            )
+        if key in keys:
+            raise CaseError(
+                f"{path}, line {head_line}, columns {keys.index(key) + 1} and {j + 1}: "
+                f"{key} is given twice; give each parameter one column"
             )
         keys.append(key)
         units.append("" if unit in ("", "-") else unit)
     cases = []
-    for i, row in enumerate(rows[1:], start=2):
+    for i, row in numbered[1:]:
         if len(row) != len(keys):
             raise CaseError(f"{path}, line {i}: {len(row)} cells for {len(keys)} columns")
         case = {}
@@ -169,6 +237,8 @@ def _csv_cases(text: str, path: Path) -> list[dict[str, Any]]:
 def _toml_cases(text: str, path: Path) -> list[dict[str, Any]]:
     try:
         data = tomllib.loads(text)
+    except RecursionError:
+        raise CaseError(f"{path}: malformed TOML: arrays or tables nested too deeply") from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{path}: malformed TOML: {exc}") from None
     tables = data.get("case", data.get("cases"))
@@ -179,11 +249,18 @@ def _toml_cases(text: str, path: Path) -> list[dict[str, Any]]:
         case = {}
         for k, v in table.items():
             # steam.T = ... is the table steam = { T = ... }; "steam.T" = ... is one key
-            if isinstance(v, dict) and "." not in k and "type" not in v:
-                for p, pv in v.items():
-                    case[f"{k}.{p}"] = pv
-            else:
-                case[k] = v
+            items = (
+                [(f"{k}.{p}", pv) for p, pv in v.items()]
+                if isinstance(v, dict) and "." not in k and "type" not in v
+                else [(k, v)]
+            )
+            for key, value in items:
+                if key in case:
+                    raise CaseError(
+                        f"{path}, case {i}: {key} is given twice (as a dotted key and in a "
+                        "table); give it once"
+                    )
+                case[key] = value
         for k in case:
             if not _KEY_RE.match(k):
                 raise CaseError(f"{path}, case {i}: expected COMPONENT.PARAMETER, got {k!r}")

@@ -18,6 +18,7 @@ if __name__ == "__main__":  # python -m dnasim.cli: the signal handlers before a
     install()
 
 import os
+import re
 import traceback
 from pathlib import Path
 
@@ -65,12 +66,12 @@ def _internal(exc: BaseException, exit_code: int) -> click.ClickException:
     return err
 
 
-def _load(plant_file: str):
+def _load(plant_file: str, allow_import: bool = False):
     from dnasim.errors import PlantError
     from dnasim.plantfile import load
 
     try:
-        return load(plant_file)
+        return load(plant_file, allow_import=allow_import)
     except PlantError as exc:
         raise InputError(str(exc)) from None
     except click.ClickException:
@@ -218,6 +219,14 @@ _COOLPROP_CACHE_OPTION = click.option(
 )
 
 
+_ALLOW_IMPORT_OPTION = click.option(
+    "--allow-import",
+    is_flag=True,
+    help="Import the Python modules the plant file's [plant] import names (their code "
+    "runs); without it such a plant file is refused.",
+)
+
+
 _UNITS_OPTION = click.option(
     "--units",
     type=click.Choice(["si", "engineering"]),
@@ -276,6 +285,7 @@ _UNITS_OPTION = click.option(
     help="Write report.html: interactive plots, events, steps, statistics, plant structure.",
 )
 @_COOLPROP_CACHE_OPTION
+@_ALLOW_IMPORT_OPTION
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
 def run(
     plant_file,
@@ -291,6 +301,7 @@ def run(
     units,
     html_report,
     coolprop_cache,
+    allow_import,
     quiet,
 ):
     """Simulate PLANT.toml and write results.csv, events.csv, steps.csv (and plots) to DIR.
@@ -316,6 +327,7 @@ def run(
             quiet,
             units=units,
             html_report=html_report,
+            allow_import=allow_import,
         )
     except (KeyboardInterrupt, _Terminate) as exc:  # outside the integration itself
         what = "SIGTERM" if isinstance(exc, _Terminate) else "Ctrl-C"
@@ -343,6 +355,7 @@ def _run(
     quiet,
     units="si",
     html_report=False,
+    allow_import=False,
 ):
     import math
 
@@ -351,7 +364,7 @@ def _run(
     finally:
         _release_signals()  # a signal held since the start: delivered now
     _coolprop_cache(coolprop_cache)
-    loaded = _load(plant_file)
+    loaded = _load(plant_file, allow_import)
     _freeze_setup_objects()
     sim = loaded.simulation
     x = _parse_option_quantity(t_end, "s", "--t-end")
@@ -417,7 +430,10 @@ def _run(
     except OutputError as exc:
         raise InputError(str(exc)) from None
     except PlantError as exc:
-        raise InputError(f"{plant_file}: {exc}") from None
+        from dnasim.plantfile import locate_messages
+
+        text = "\n".join(locate_messages(plant_file, str(exc).split("\n")))
+        raise InputError(f"{plant_file}: {text}") from None
     except DnasimError as exc:
         raise InputError(f"{plant_file}: the plant cannot be simulated: {exc}") from None
     except Exception as exc:
@@ -426,11 +442,14 @@ def _run(
             raise InputError(located) from None
         raise _internal(exc, EXIT_SIMULATION) from None
 
+    not_written = None  # a plot or report that did not fit: exit 2 after the summary
     if plot and outcome.t_reached is not None and outcome.status != "output-error":
         from dnasim.runner import write_plots
 
         try:
             files = write_plots(outcome, out, patterns, units=units)
+        except OutputError as exc:
+            not_written, files = exc, []
         except Exception as exc:  # a plot must not hide the result of the run
             click.echo(f"dnasim: warning: plotting failed: {type(exc).__name__}: {exc}", err=True)
             files = []
@@ -442,6 +461,8 @@ def _run(
 
         try:
             f = write_report(outcome, loaded, out, units=units)
+        except OutputError as exc:
+            not_written = not_written or exc
         except Exception as exc:  # a report must not hide the result of the run
             click.echo(f"dnasim: warning: report failed: {type(exc).__name__}: {exc}", err=True)
         else:
@@ -453,6 +474,13 @@ def _run(
         raise InputError(outcome.failure_message())
     if not outcome.success:
         raise SimulationFailed(outcome.failure_message())
+    if not_written is not None:
+        raise InputError(
+            f"{not_written}; the run {outcome.status} and its results.csv, events.csv and "
+            f"steps.csv in {out} are complete. Free disk space (or raise the file size "
+            "limit) and run again, or draw the plots from the saved results with "
+            f"`dnasim plot {out / 'results.csv'}`"
+        )
 
 
 def _check_var_patterns(system, patterns, plant_file) -> None:
@@ -519,12 +547,13 @@ def _located(exc: BaseException, plant_file: str) -> str | None:
 @main.command(context_settings=CONTEXT_SETTINGS)
 @click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
 @_COOLPROP_CACHE_OPTION
-def check(plant_file, coolprop_cache):
+@_ALLOW_IMPORT_OPTION
+def check(plant_file, coolprop_cache, allow_import):
     """Validate PLANT.toml and analyse its structure (equations, unknowns, states,
     matching) without simulating. Exits 2 on any problem."""
     old = _catch_sigterm()
     try:
-        _check(plant_file, coolprop_cache)
+        _check(plant_file, coolprop_cache, allow_import)
     except (KeyboardInterrupt, _Terminate) as exc:
         what = "SIGTERM" if isinstance(exc, _Terminate) else "Ctrl-C"
         raise SimulationFailed(f"{plant_file}: check interrupted ({what})") from None
@@ -533,11 +562,11 @@ def check(plant_file, coolprop_cache):
             signal.signal(signal.SIGTERM, old)
 
 
-def _check(plant_file, coolprop_cache):
+def _check(plant_file, coolprop_cache, allow_import=False):
     from dnasim.errors import DnasimError, PlantError
 
     _coolprop_cache(coolprop_cache)
-    loaded = _load(plant_file)
+    loaded = _load(plant_file, allow_import)
     try:
         from dnasim.compiler import check
 
@@ -552,8 +581,16 @@ def _check(plant_file, coolprop_cache):
         if located is not None:
             raise InputError(located) from None
         raise _internal(exc, EXIT_INPUT) from None
+    from dnasim.plantfile import locate_messages, notices
     from dnasim.runner import describe_report
 
+    try:
+        text = Path(plant_file).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        text = None
+    for note in notices(loaded.spec, text):
+        click.echo(f"dnasim: note: {note}", err=True)
+    report.errors = locate_messages(plant_file, report.errors)
     text, ok = describe_report(report)
     click.echo(
         f"{plant_file}: plant '{loaded.spec.name}', {len(loaded.spec.components)} components"
@@ -701,7 +738,8 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file, units):
     "--scheduler",
     default=None,
     metavar="ADDRESS",
-    help="Run on an existing Dask distributed cluster, e.g. tcp://127.0.0.1:8786.",
+    help="Run on an existing Dask distributed cluster, e.g. tcp://127.0.0.1:8786 (tcp:// or "
+    "tls://). Only a scheduler you control: Dask exchanges pickles, which run code.",
 )
 @click.option(
     "--output-interval",
@@ -711,6 +749,7 @@ def plot_cmd(results_csv, patterns, var_patterns, out_file, units):
     "[default: the plant file's, else 501 points].",
 )
 @_COOLPROP_CACHE_OPTION
+@_ALLOW_IMPORT_OPTION
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar and no summary.")
 def sweep_cmd(
     plant_file,
@@ -721,6 +760,7 @@ def sweep_cmd(
     scheduler,
     output_interval,
     coolprop_cache,
+    allow_import,
     quiet,
 ):
     """Run PLANT.toml for many parameter sets: the Cartesian product of --set values,
@@ -732,7 +772,7 @@ def sweep_cmd(
     from dnasim.errors import OutputError
 
     _coolprop_cache(coolprop_cache)
-    loaded = _load(plant_file)
+    loaded = _load(plant_file, allow_import)
     if bool(set_options) == bool(cases_file):
         raise InputError("give the cases with --set COMP.PARAM=V1,V2,... or with --cases FILE")
     try:
@@ -753,6 +793,20 @@ def sweep_cmd(
     if not cases:
         raise InputError(f"{cases_file}: no cases")
     dt = _parse_option_quantity(output_interval, "s", "--output-interval")
+    from dnasim.sweeps import check_output_sizes, sweep
+
+    try:
+        spec = loaded.spec
+        if dt is not None:
+            import copy
+
+            spec = copy.deepcopy(spec)
+            spec.simulation.output_interval = dt
+        check_output_sizes(spec, cases, dt)
+    except CaseError as exc:
+        src = "option --output-interval" if dt is not None else plant_file
+        raise InputError(f"{src}: {exc}") from None
+    address = _scheduler_address(scheduler) if scheduler else None
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -760,12 +814,11 @@ def sweep_cmd(
         raise InputError(
             f"cannot create the output directory {out}: {exc.strerror or exc}"
         ) from None
-    from dnasim.sweeps import sweep
 
     progress = not quiet and sys.stdout.isatty()
     client = None
     try:
-        if scheduler:
+        if address:
             try:
                 from dask.distributed import Client
             except ImportError:
@@ -773,10 +826,10 @@ def sweep_cmd(
                     "option --scheduler needs dask.distributed: pip install 'dask[distributed]'"
                 ) from None
             try:
-                client = Client(scheduler, timeout=10)
-            except (OSError, TimeoutError) as exc:
+                client = Client(address, timeout=10)
+            except Exception as exc:  # refused, timed out, a scheme dask cannot use
                 raise InputError(
-                    f"option --scheduler: cannot connect to {scheduler}: {exc}"
+                    f"option --scheduler: cannot connect to {address}: {type(exc).__name__}: {exc}"
                 ) from None
             executor = client.get_executor()
         else:
@@ -786,6 +839,12 @@ def sweep_cmd(
             result = sweep(
                 loaded.spec, cases, executor, out_dir=out, output_interval=dt, progress=progress
             )
+        except BaseException:
+            # an interrupt or an output error: the running cases are not waited for
+            stop = getattr(executor, "terminate_workers", None)
+            if stop is not None:
+                stop()
+            raise
         finally:
             if executor is not None and client is None:
                 executor.shutdown(cancel_futures=True)
@@ -803,10 +862,26 @@ def sweep_cmd(
     finally:
         if client is not None:
             client.close()
+    if result.changed:
+        click.echo(
+            f"dnasim: note: {result.changed} of the cases in {out} had been run with another "
+            "plant or other settings (the plant file, its parameters or --output-interval "
+            "changed since): they were run again",
+            err=True,
+        )
     if not quiet:
         click.echo(
             f"{len(cases)} cases: ran {result.ran}, skipped {result.skipped} (done before), "
             f"failed {result.failed}\nresults in {out} (sweep.nc, summary.csv, case_NNNN/)"
+        )
+    full = result.summary[result.summary["status"] == "output-error"]
+    if len(full):
+        first = full.iloc[0]
+        raise InputError(
+            f"{len(full)} of {len(cases)} cases could not write their results (case "
+            f"{first['case']}: {first['message']}); the other cases are in {out}. Free disk "
+            "space (or raise the file size limit) and start the same command again: the "
+            "cases that are done are skipped, these run again"
         )
     if result.failed:
         bad = result.summary[result.summary["status"] != "finished"]
@@ -817,11 +892,67 @@ def sweep_cmd(
 
 
 def _process_pool(n: int):
-    """``n`` local worker processes (spawned: no threads of this process are copied)."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    """``n`` local worker processes (spawned: no threads of this process are copied)
+    that exit when this process dies (``dnasim.sweeps.LocalPool``)."""
+    from dnasim.sweeps import local_pool
 
-    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"))
+    return local_pool(n)
+
+
+#: schemes of Dask's communication layer that reach a scheduler over the network
+SCHEDULER_SCHEMES = ("tcp", "tls")
+_HOST_LABEL = re.compile(r"^(?!-)[A-Za-z0-9-]{1,63}(?<!-)$")
+
+
+def _scheduler_address(text: str) -> str:
+    """``--scheduler``: ``[tcp://|tls://]HOST:PORT`` with a host name, an IPv4
+    address or a bracketed IPv6 address and a port 1..65535; returns the address
+    with its scheme. Raises ``InputError`` saying what is wrong."""
+    import ipaddress
+
+    def bad(why):
+        return InputError(
+            f"option --scheduler {text[:80]!r}{'...' if len(text) > 80 else ''}: {why}; "
+            "expected the address of a Dask scheduler, e.g. tcp://127.0.0.1:8786 or "
+            "tls://scheduler.example.org:8786"
+        )
+
+    raw = text.strip()
+    scheme, sep, rest = raw.partition("://")
+    if not sep:
+        scheme, rest = "tcp", raw
+    scheme = scheme.lower()
+    if scheme not in SCHEDULER_SCHEMES:
+        known = ", ".join(f"{x}://" for x in SCHEDULER_SCHEMES)
+        raise bad(f"the scheme '{scheme}://' is not one of {known}")
+    if not rest or any(c in rest for c in "/?#@ \t"):
+        raise bad("no host and port, or a path, user or query in it")
+    if rest.startswith("["):
+        host, close, tail = rest[1:].partition("]")
+        if not close:
+            raise bad("an IPv6 address without its closing ']'")
+        try:
+            ipaddress.IPv6Address(host)
+        except ValueError:
+            raise bad(f"'{host}' is not an IPv6 address") from None
+        if not tail.startswith(":"):
+            raise bad("no port (write [::1]:8786)")
+        port = tail[1:]
+        shown = f"[{host}]"
+    else:
+        host, colon, port = rest.rpartition(":")
+        if not colon:
+            raise bad("no port (write HOST:8786)")
+        if ":" in host:
+            raise bad("an IPv6 address must be in brackets, [::1]:8786")
+        if len(host) > 253:
+            raise bad(f"the host name has {len(host)} characters, more than the 253 DNS allows")
+        if not all(_HOST_LABEL.match(x) for x in host.split(".")):
+            raise bad("the host is not a host name or an IPv4 address")
+        shown = host
+    if not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise bad(f"the port '{port[:20]}' is not a number from 1 to 65535")
+    return f"{scheme}://{shown}:{int(port)}"
 
 
 # --------------------------------------------------------------------------- linearize
@@ -850,14 +981,15 @@ def _process_pool(n: int):
     "-o", "--output", "out_dir", default=None, metavar="DIR", help="Write linear.npz/.mat here."
 )
 @click.option("--all-states", is_flag=True, help="Keep states no output depends on.")
-def linearize(plant_file, inputs, outputs, at, out_dir, all_states):
+@_ALLOW_IMPORT_OPTION
+def linearize(plant_file, inputs, outputs, at, out_dir, all_states, allow_import):
     """Linearise PLANT.toml: x' = A x + B u, y = C x + D u; print eigenvalues, time
     constants, damping and DC gains; with -o write linear.npz (+ linear_A.npz ...,
     scipy.sparse) and linear.mat."""
     from dnasim.errors import DnasimError
     from dnasim.linearize import linearize as _linearize
 
-    loaded = _load(plant_file)
+    loaded = _load(plant_file, allow_import)
     t = None if at.strip().lower() == "steady" else _parse_option_quantity(at, "s", "--at")
     try:
         lm = _linearize(

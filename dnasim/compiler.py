@@ -157,7 +157,11 @@ def check(plant):
         report.errors.extend(signal_loops(system))
     report.errors.extend(errors)
     if not report.errors:
+        report.errors.extend(_medium_problems(plant))
+    if not report.errors:
         report.errors.extend(_state_problems(plant))
+    if not report.errors:
+        report.errors.extend(_vessel_problems(plant))
     return report, system
 
 
@@ -319,22 +323,118 @@ def signal_loops(system) -> list[str]:
     return out
 
 
+def _medium_problems(plant) -> list[str]:
+    """Components that hold a liquid and its vapour (``Component.TWO_PHASE_GROUPS``:
+    a drum, a feedwater tank, a condenser's shell) given a medium without a
+    two-phase region (a gas): one message each, naming the component and the key
+    of the medium, instead of the property failure that would follow."""
+    from dnasim.components.physics import is_condensable
+
+    out = []
+    for name, comp in plant.components.items():
+        need = getattr(comp, "TWO_PHASE_GROUPS", ())
+        if not need:
+            continue
+        for group, param, ports in comp.medium_groups():
+            medium = next((comp.port_media.get(p) for p in ports if comp.port_media.get(p)), None)
+            if group not in need or medium is None or is_condensable(medium):
+                continue
+            kind = type(comp).__name__
+            side = "" if group == "fluid" else f" on its {group} side"
+            out.append(
+                f"component '{name}' ({kind}), key '{param}': the medium "
+                f"{getattr(medium, 'label', medium)} has no two-phase region, but a {kind} "
+                f"holds saturated liquid and vapour{side} and needs a two-phase (condensable) "
+                f'medium such as "Water"; give the component {param} = "Water" or change '
+                "the plant's medium"
+            )
+    return out
+
+
+def _component_message(comp, err: Exception, t: float) -> str:
+    """``err`` raised by component ``comp`` as a message naming it and, for a state
+    a parameter gives (a temperature or pressure out of a fluid's range), the key:
+    ``component 'pipe' (Pipe), key 'T0': FlueGas (NASA7): cannot evaluate h_pT ...``."""
+    msg = str(err)
+    if msg.startswith(f"component '{comp.name}'"):
+        return msg
+    key = None
+    for value in (getattr(err, "T", None), getattr(err, "p", None)):
+        if key is None and isinstance(value, float):
+            key = _param_with_value(comp, value, t)
+    where = f"component '{comp.name}' ({type(comp).__name__})"
+    return f"{where}{f', key {key!r}' if key else ''}: {msg}"
+
+
+def _param_with_value(comp, value: float, t: float) -> str | None:
+    """The first parameter of ``comp`` whose value (SI, at time t) is ``value``."""
+    for pname, v in getattr(comp, "params", {}).items():
+        if v is None or isinstance(v, bool | str):
+            continue
+        try:
+            x = float(comp.param_at(pname, t)) if callable(v) else float(v)
+        except (TypeError, ValueError, KeyError, AttributeError):
+            continue
+        if x == value or abs(x - value) <= 1e-9 * max(1.0, abs(value)):
+            return pname
+    return None
+
+
 def _state_problems(plant, t0: float = 0.0) -> list[str]:
-    """States the components prescribe (a boundary's supply at (p, T)), evaluated at
-    t0 and at every breakpoint of their time functions: a pressure above the fluid's
-    range, 5000 degC, a (p, T) supply at its saturation temperature. The messages
-    name the component and the state (``BoundaryStateError``); found here, ``dnasim
-    check`` reports them before any numerics."""
+    """States the components prescribe (a boundary's supply at (p, T), a pipe's T0, a
+    turbine's nominal inlet state), evaluated at t0 and at every breakpoint of their
+    time functions: a pressure above the fluid's range, 5000 degC, a (p, T) supply at
+    its saturation temperature. The messages name the component and, where a
+    parameter gives the state, the key (``_component_message``); found here,
+    ``dnasim check`` reports them before any numerics."""
     from dnasim.errors import ResidualDomainError
 
     problems = []
+    t0 = getattr(getattr(plant, "simulation", None), "t_start", t0)
     for comp in plant.components.values():
         for t in sorted({t0, *comp.breakpoints()}):
             try:
                 comp.guess_nodes(t)
             except (ResidualDomainError, PlantError, ValueError) as err:
-                problems.append(str(err))
+                problems.append(_component_message(comp, err, t))
                 break
+    return problems
+
+
+def _vessel_problems(plant) -> list[str]:
+    """Set points that ask a vessel for more than it holds: a controller's
+    ``setpoint`` (at its start and every breakpoint) for a signal that the vessel
+    bounds (``Component.signal_range``: a drum's level below V_t/A, its V_l below
+    V_t). At a steady start the controller's integral puts exactly that much water
+    in the vessel; found here, ``dnasim check`` reports it."""
+    problems = []
+    t0 = getattr(getattr(plant, "simulation", None), "t_start", 0.0)
+    for (dname, inp), (sname, ref) in plant.links.items():
+        dest, src = plant.components.get(dname), plant.components.get(sname)
+        if inp != "measured" or dest is None or src is None:
+            continue
+        if dest.params.get("setpoint") is None or not hasattr(src, "signal_range"):
+            continue
+        bounds = src.signal_range(ref)
+        if bounds is None:
+            continue
+        lo, hi, unit, what = bounds
+        for t in sorted({t0, *dest.breakpoints()}):
+            try:
+                w = float(dest.param_at("setpoint", t))
+            except (TypeError, ValueError, KeyError):
+                break
+            if lo < w < hi:
+                continue
+            side = f"above {what}" if w >= hi else f"at or below {lo:g} {unit}, an empty vessel"
+            problems.append(
+                f"component '{dname}' ({type(dest).__name__}), key 'setpoint': the set point "
+                f"{w:.6g} {unit} of '{sname}.{ref}' (at t = {t:g} s) is {side}: the "
+                f"controller would drive '{sname}' ({type(src).__name__}) outside its volume "
+                "(at a steady start it puts exactly this much liquid in it); give a set "
+                f"point between {lo:g} and {hi:.6g} {unit}, or a larger vessel"
+            )
+            break
     return problems
 
 

@@ -51,6 +51,8 @@ __all__ = [
     "plot_steps",
     "EVENT_COLUMNS",
     "STEP_COLUMNS",
+    "spreadsheet_safe",
+    "spreadsheet_frame",
 ]
 
 EVENT_COLUMNS = ("event", "iteration", "time", "switch_value", "component", "switch")
@@ -371,10 +373,38 @@ def _format_rows(pending: list) -> list[tuple[float, str]]:
     ]
 
 
+#: first characters that make a spreadsheet read a cell as a formula (OWASP, "CSV
+#: injection"): = + - @, and tab and carriage return
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+_NUMBER_RE = re.compile(r"^[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf|nan|infinity)$", re.I)
+
+
+def spreadsheet_safe(text: str) -> str:
+    """``text`` as a CSV cell that a spreadsheet shows as text, never evaluates: a
+    cell starting with = + - @, a tab or a carriage return gets a leading single
+    quote (the OWASP rule), ``'=HYPERLINK(...)``. Numbers stay numbers: ``-1.5``,
+    ``+2e5``, ``-inf`` are left as they are."""
+    if text and text.startswith(FORMULA_START) and not _NUMBER_RE.match(text):
+        return "'" + text
+    return text
+
+
+def spreadsheet_frame(frame):
+    """A copy of a pandas DataFrame whose text cells and column names are
+    ``spreadsheet_safe`` (numbers untouched), for ``to_csv``."""
+    out = frame.copy()
+    out.columns = [spreadsheet_safe(str(c)) for c in out.columns]
+    for j in range(out.shape[1]):
+        col = out.iloc[:, j]
+        if col.dtype.kind not in "biufcmM":  # text (object or pandas' str dtype)
+            out.iloc[:, j] = [spreadsheet_safe(v) if isinstance(v, str) else v for v in col]
+    return out
+
+
 def _csv_line(fields: Iterable) -> str:
     out = []
     for f in fields:
-        s = str(f)
+        s = spreadsheet_safe(str(f))
         if any(c in s for c in ',"\n\r'):
             s = '"' + s.replace('"', '""') + '"'
         out.append(s)

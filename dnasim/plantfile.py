@@ -322,18 +322,67 @@ def read_plant_file(path: str | Path) -> tuple[dict, str]:
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
+        line, col = _byte_line_column(raw, exc.start)
         raise PlantError(
-            f"{path}: not a UTF-8 text file ({exc.reason} at byte {exc.start})"
+            f"{path}, line {line}, column {col}: not a UTF-8 text file (byte "
+            f"0x{raw[exc.start]:02x}: {exc.reason}); save the plant file as UTF-8"
         ) from None
     return _decode(text, str(path)), text
+
+
+def _byte_line_column(raw: bytes, pos: int) -> tuple[int, int]:
+    """Line and column (in characters, both from 1) of byte ``pos`` of ``raw``."""
+    start = raw.rfind(b"\n", 0, pos) + 1
+    return raw.count(b"\n", 0, pos) + 1, len(raw[start:pos].decode("utf-8", "replace")) + 1
+
+
+#: nesting of arrays and inline tables that a plant file never needs
+DEEP_NESTING = 50
+
+
+def _deep_line(text: str, limit: int = DEEP_NESTING) -> int | None:
+    """The line where arrays and inline tables first nest ``limit`` deep (strings
+    and comments skipped), or None."""
+    depth, line, i, n = 0, 1, 0, len(text)
+    while i < n:
+        ch = text[i]
+        if ch == "\n":
+            line += 1
+        elif ch == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        elif ch in "\"'":
+            q = text[i : i + 3] if text[i : i + 3] in ('"""', "'''") else ch
+            j = i + len(q)
+            while j < n and text[j : j + len(q)] != q:
+                if text[j] == "\\" and ch == '"':
+                    j += 1
+                elif text[j] == "\n":
+                    if len(q) == 1:
+                        break
+                    line += 1
+                j += 1
+            i = j + len(q)
+            continue
+        elif ch in "[{":
+            depth += 1
+            if depth >= limit:
+                return line
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+        i += 1
+    return None
 
 
 def _decode(text: str, path: str) -> dict:
     try:
         return tomllib.loads(text)
     except RecursionError:
+        line = _deep_line(text)
+        where = f"{path}, line {line}" if line else path
         raise PlantError(
-            f"{path}: malformed plant file: arrays or tables nested too deeply (a plant file "
+            f"{where}: malformed plant file: arrays or tables nested too deeply (a plant file "
             "needs at most a few levels)"
         ) from None
     except tomllib.TOMLDecodeError as exc:
@@ -626,6 +675,7 @@ def _component(
     sout = signal_outputs(cls)
     n0 = len(errors.items)
     unchecked = False
+    unchecked_keys: list[str] = []
     for key, value in table_data.items():
         if key in RESERVED_KEYS:
             continue
@@ -649,6 +699,7 @@ def _component(
             # in the unit of a signal that is not (properly) linked: the broken link is
             # reported by the network check; unit errors here would only follow from it
             unchecked = True
+            unchecked_keys.append(key)
             continue
         spec.params[key] = param_value(
             value, p, errors, table, key, signal_units, cls, atmosphere=atmosphere
@@ -672,14 +723,28 @@ def _component(
         try:
             spec.instance = cls(name, **spec.params)
         except PlantError as exc:
-            errors.add(table, None, _strip_component_prefix(str(exc), name))
+            msg = _strip_component_prefix(str(exc), name)
+            errors.add(table, _key_named(msg, table_data), msg)
         except (TypeError, ValueError, KeyError, ArithmeticError) as exc:
-            errors.add(table, None, f"{tname} refused its parameters: {exc}")
+            msg = f"{tname} refused its parameters: {exc}"
+            errors.add(table, _key_named(str(exc), table_data), msg)
         else:
             inst = spec.instance
             fports = _names(inst.fluid_ports()) if hasattr(inst, "fluid_ports") else fports
             sin = _names(inst.signal_inputs()) if hasattr(inst, "signal_inputs") else sin
             sout = _names(inst.signal_outputs()) if hasattr(inst, "signal_outputs") else sout
+    ports_known = spec.instance is not None
+    if len(errors.items) == n0 and unchecked:
+        # parameters in the unit of an unlinked signal: a probe with placeholder values
+        # (1 in any unit) tells which ports the component has; it is not kept
+        try:
+            probe = cls(name, **{**spec.params, **dict.fromkeys(unchecked_keys, 1.0)})
+        except Exception:  # the placeholders do not fit: the class's ports are used
+            probe = None
+        if probe is not None:
+            ports_known = True
+            fports = _names(probe.fluid_ports()) if hasattr(probe, "fluid_ports") else fports
+            sin = _names(probe.signal_inputs()) if hasattr(probe, "signal_inputs") else sin
     spec.fluid_ports, spec.signal_inputs, spec.signal_outputs = fports, sin, sout
     # fluid ports
     ports = table_data.get("ports", {})
@@ -718,7 +783,11 @@ def _component(
             errors.add(sub, port, f"invalid node name {node!r}: use letters, digits, '_' and '-'")
             continue
         spec.ports[port] = node
-    for port in fports:
+    # Without a built instance (its parameters are in error) the ports that depend on
+    # parameters are unknown: an "unconnected port" would follow from that error only
+    # (a controller's set_point and track inputs, a mixer's inlets).
+    built = ports_known
+    for port in fports if built else ():
         if port not in ports:
             errors.add(
                 table,
@@ -782,7 +851,7 @@ def _component(
             )
             continue
         spec.inputs[inp] = src
-    for inp in sin:
+    for inp in sin if built else ():
         if inp not in inputs and None not in signal_units:  # else the broken link says it
             errors.add(
                 table,
@@ -931,10 +1000,14 @@ def _instance_port(spec: ComponentSpec, method: str, attr: str, name: str):
     return _port(getattr(spec.cls, attr, ()), name)
 
 
-def _plugin_imports(v, path, errors) -> list[str]:
+def _plugin_imports(v, path, errors, allow_import: bool = False) -> list[str]:
     """``[plant] import = ["my_components"]``: import the component modules now
-    (before the component types are looked up), next to the plant file first."""
-    from dnasim.plugins import import_component_modules
+    (before the component types are looked up), next to the plant file first.
+
+    Only with ``allow_import`` (``--allow-import``, ``load(path, allow_import=True)``):
+    importing a module runs its code, and a plant file is data. Without it the
+    modules are named in one problem (how to allow them), and nothing is imported."""
+    from dnasim.plugins import import_component_modules, module_origin
 
     names = [v] if isinstance(v, str) else v
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
@@ -942,6 +1015,20 @@ def _plugin_imports(v, path, errors) -> list[str]:
         return []
     p = Path(str(path))
     base = p.parent if p.suffix and p.parent.is_dir() else None
+    if not allow_import:
+        if names:
+            found = ", ".join(f"'{n}' ({module_origin(n, base)})" for n in names)
+            errors.add(
+                ("plant",),
+                "import",
+                f"the plant file asks to import the Python module{'s' if len(names) > 1 else ''} "
+                f"{found}; not imported: importing a module runs its code, and a plant file "
+                "is data that runs no code by itself. If you trust the module, allow it with "
+                "--allow-import (dnasim check/run/sweep --allow-import PLANT.toml; in Python "
+                "dnasim.plantfile.load(path, allow_import=True)), or install it as a plugin "
+                "(entry point group 'dnasim.components'); otherwise remove the key",
+            )
+        return []
     try:
         return import_component_modules(names, base)
     except PlantError as exc:
@@ -981,8 +1068,13 @@ def _atmosphere(v, errors: Problems) -> float:
     return x
 
 
-def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> PlantSpec:
-    """Validate decoded TOML; every problem becomes part of one ``PlantError``."""
+def parse_plant(
+    data: dict, path: str = "<plant>", text: str | None = None, *, allow_import: bool = False
+) -> PlantSpec:
+    """Validate decoded TOML; every problem becomes part of one ``PlantError``.
+
+    ``allow_import``: import the modules of ``[plant] import`` (they run code);
+    without it such a key is refused, alone, before anything else is read."""
     errors = Problems(str(path), _LineIndex(text) if text is not None else None)
     if not isinstance(data, dict):
         errors.add((), None, "a plant file is a TOML document of tables")
@@ -1014,7 +1106,9 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
             if medium is not None:
                 _check_medium(medium, errors, ("plant",), k)
         elif k == "import":
-            imports = _plugin_imports(v, path, errors)
+            imports = _plugin_imports(v, path, errors, allow_import)
+            if not allow_import:
+                errors.raise_if_any()  # one paragraph: nothing of the file is used
         elif k == "atmosphere":
             atmosphere = _atmosphere(v, errors)
         else:
@@ -1085,8 +1179,72 @@ def parse_plant(data: dict, path: str = "<plant>", text: str | None = None) -> P
 # --------------------------------------------------------------------------- building
 
 
+def notices(spec: PlantSpec, text: str | None = None) -> list[str]:
+    """Notes ``dnasim check`` prints about choices that are valid but not physical,
+    located like problems: a pipe with ``internal_energy = "mean"`` (the seed's eq.
+    10.12c: after a step of the inflow the outflow first jumps the other way, and a
+    gas may leave colder than anything in the plant)."""
+    errors = Problems(str(spec.path), _LineIndex(text) if text is not None else None)
+    for c in spec.components:
+        if c.params.get("internal_energy") == "mean":
+            errors.add(
+                ("components", c.name),
+                "internal_energy",
+                'internal_energy = "mean" is the seed\'s U = M (u_in + u_out)/2 '
+                "(eq. 10.12c), kept as its option but not physical: after a step of the "
+                "inflow the outflow first jumps the other way, and a gas may leave colder "
+                'than anything in the plant; "outlet" (the default, a mixed volume) has '
+                "neither artefact",
+            )
+    return errors.items
+
+
+_COMPONENT_MESSAGE = re.compile(
+    r"^(?P<lead>\s*(?:- )?)component '(?P<name>[^']+)'(?: \((?P<type>[\w.]+)\))?"
+    r"(?:, key '(?P<key>[^']+)')?: (?P<rest>.*)$",
+    re.S,
+)
+
+
+def locate_messages(path, messages: Sequence[str]) -> list[str]:
+    """Messages of the later stages (compiler, start) that begin with ``component
+    'NAME' (Type)[, key 'KEY']: ...``, located in the plant file as the file's own
+    problems are: ``plant.toml, [components.NAME], key 'KEY', line N: (Type) ...``.
+    Other messages, and a file that cannot be read, are left as they are."""
+    try:
+        text = Path(str(path)).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return list(messages)
+    lines = _LineIndex(text)
+    out = []
+    for msg in messages:
+        m = _COMPONENT_MESSAGE.match(msg)
+        if m is None:
+            out.append(msg)
+            continue
+        errors = Problems(str(path), lines)
+        kind = f"{m['type']} '{m['name']}': " if m["type"] else ""
+        errors.add(("components", m["name"]), m["key"], kind + m["rest"])
+        out.append(m["lead"] + errors.items[0])
+    return out
+
+
 def _port_example(ports) -> str:
     return ", ".join(f'{q} = "n{i}"' for i, q in enumerate(ports, 1)) or 'inlet = "n1"'
+
+
+def _key_named(msg: str, table_data: dict) -> str | None:
+    """The parameter of the component's table that its own message names first
+    ("z_max must be greater than z_min" -> 'z_max'), for the key and line; None
+    when it names none."""
+    best = None
+    for key in table_data:
+        if key in RESERVED_KEYS or not isinstance(key, str):
+            continue
+        m = re.search(rf"(?<![\w.]){re.escape(key)}(?![\w])", msg)
+        if m and (best is None or m.start() < best[0]):
+            best = (m.start(), key)
+    return best[1] if best else None
 
 
 def _strip_component_prefix(msg: str, name: str) -> str:
@@ -1094,22 +1252,25 @@ def _strip_component_prefix(msg: str, name: str) -> str:
     return re.sub(rf"^component '{re.escape(name)}'( \(\w+\))?: ", "", msg)
 
 
-def load(path: str | Path) -> LoadedPlant:
-    """Read, validate and build: the plant, its ``[simulation]`` settings and its spec."""
+def load(path: str | Path, *, allow_import: bool = False) -> LoadedPlant:
+    """Read, validate and build: the plant, its ``[simulation]`` settings and its spec.
+
+    ``allow_import=True`` imports the modules a ``[plant] import`` key names (their
+    code runs); without it such a file is refused with a ``PlantError`` saying so."""
     data, text = read_plant_file(path)
-    spec = parse_plant(data, str(path), text)
+    spec = parse_plant(data, str(path), text, allow_import=allow_import)
     plant = build_plant(spec)
     return LoadedPlant(plant=plant, simulation=spec.simulation, spec=spec, path=str(path))
 
 
-def loads(text: str, path: str = "<string>") -> LoadedPlant:
+def loads(text: str, path: str = "<string>", *, allow_import: bool = False) -> LoadedPlant:
     """Like :func:`load` for TOML text."""
     data = _decode(text, path)
-    spec = parse_plant(data, path, text)
+    spec = parse_plant(data, path, text, allow_import=allow_import)
     return LoadedPlant(plant=build_plant(spec), simulation=spec.simulation, spec=spec, path=path)
 
 
-def load_plant(path: str | Path):
+def load_plant(path: str | Path, *, allow_import: bool = False):
     """The ``Plant`` described by a TOML plant file, the same object the Python API builds.
 
     The file's ``[simulation]`` settings are attached as ``plant.simulation``
@@ -1119,7 +1280,7 @@ def load_plant(path: str | Path):
         res = plant.simulate(plant.simulation.t_end, rtol=1e-6, atol_scaled=1e-8)
         df = res.to_dataframe()
     """
-    return load(path).plant
+    return load(path, allow_import=allow_import).plant
 
 
 def simulate_plant(plant, settings: SimulationSettings | None = None, **overrides):

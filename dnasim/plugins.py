@@ -8,7 +8,11 @@ itself under its class name when its module is imported):
   module or a class), loaded once, the first time the registry is asked for;
 * modules a plant file names: ``[plant] import = ["my_components"]``, resolved
   next to the plant file first (``my_components.py`` or a package directory
-  ``my_components/``), then on ``sys.path``.
+  ``my_components/``), then on ``sys.path``. Importing runs the module's code, and
+  a plant file is data: such a key is honoured only when the user allows it
+  (``dnasim run --allow-import``, ``dnasim.plantfile.load(path, allow_import=True)``);
+  otherwise the plant file is refused with a message naming the modules
+  (:func:`module_origin`, found without importing anything).
 
 A second class with a name already in the registry is an error
 (``dnasim.components.base.Component.__init_subclass__``), so a plugin cannot
@@ -24,7 +28,13 @@ from pathlib import Path
 
 from dnasim.errors import PlantError
 
-__all__ = ["ENTRY_POINT_GROUP", "load_entry_points", "import_component_modules", "registry"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "load_entry_points",
+    "import_component_modules",
+    "module_origin",
+    "registry",
+]
 
 ENTRY_POINT_GROUP = "dnasim.components"
 _loaded = False
@@ -98,6 +108,30 @@ def import_component_modules(names, base_dir=None) -> list[str]:
             ) from None
         out.append(name)
     return out
+
+
+def module_origin(name, base_dir=None) -> str:
+    """Where ``[plant] import`` would take the module ``name`` from, in words, found
+    without importing it (nor its parent packages): a file next to the plant file,
+    a file on ``sys.path``, or nowhere."""
+    import importlib.machinery
+
+    if not isinstance(name, str) or not all(p.isidentifier() for p in name.split(".")):
+        return "not a module name"
+    local = _local_module(name, base_dir)
+    if local is not None:
+        return f"{local}, next to the plant file"
+    if "." in name:
+        return "a submodule of a package on sys.path"
+    if name in sys.builtin_module_names:
+        return "a module built into Python"
+    try:
+        found = importlib.machinery.PathFinder.find_spec(name)
+    except (ImportError, ValueError):
+        found = None
+    if found is None:
+        return "not found next to the plant file nor on sys.path"
+    return f"{found.origin or name}, on sys.path"
 
 
 def _local_module(name, base_dir):

@@ -3,10 +3,13 @@ traceback or a hang; the command exits 0, or 2 with a message naming the plant
 file, or 1 for a simulation that fails (with its time and cause).
 
 The mutations (deleted and duplicated keys, wrong types, wrong units, extreme
-numbers, dangling names, deep nesting) are those of benchmarks/fuzz_plants.py,
-driven by hypothesis' random source so a failure shrinks to a small example.
-About 1500 cases, under a minute in total: a check takes 10-30 ms, a run of 0.5 s
-simulated time 0.1-0.5 s.
+numbers, dangling names, deep nesting, other component types and media, bytes that
+are not UTF-8, a ``[plant] import`` of a module that must not run) are those of
+benchmarks/fuzz_plants.py, driven by hypothesis' random source so a failure shrinks
+to a small example; one case in twenty is a ``dnasim sweep`` with fuzzed options
+(cases files, ``--set``, ``--output-interval``, ``--scheduler``, ``--allow-import``).
+About 1500 cases, a minute or two in total: a check takes 10-30 ms, a run of 0.5 s
+simulated time 0.1-0.5 s, a sweep of one or two such cases 0.2-1 s.
 """
 
 from __future__ import annotations
@@ -39,13 +42,20 @@ CHECK_ONLY: set[str] = set()
 @given(
     base=st.sampled_from(BASES),
     rnd=st.randoms(use_true_random=False),
-    run=st.integers(0, 9),
+    run=st.integers(0, 19),
 )
 def test_mutated_plants_fail_cleanly(tmp_path_factory, base, rnd: random.Random, run):
     name, data = base
     text = fuzz.mutate(data, rnd)
-    # one case in ten simulates 0.5 s
-    command = "run" if run == 0 and name not in CHECK_ONLY else "check"
+    # one case in ten simulates 0.5 s, one in twenty sweeps (cases of 0.3-0.5 s)
+    command = {0: "run", 1: "run", 2: "sweep"}.get(run, "check")
+    if name in CHECK_ONLY:
+        command = "check"
     workdir = tmp_path_factory.mktemp("fuzz")
-    outcome, output = fuzz.classify(command, text, str(workdir), timeout=60.0)
-    assert outcome in ("clean", "ok"), f"{name} ({command}): {outcome}\n{output}\n---\n{text}"
+    options = fuzz.sweep_options(rnd, str(workdir)) if command == "sweep" else []
+    if command != "sweep" and run == 3:
+        options = ["--allow-import"]
+    outcome, output = fuzz.classify(command, text, str(workdir), timeout=60.0, options=options)
+    assert outcome in ("clean", "ok"), (
+        f"{name} ({command} {options}): {outcome}\n{output}\n---\n{text}"
+    )

@@ -1,4 +1,5 @@
-"""Component plugins: a module named by the plant file, and name clashes."""
+"""Component plugins: a module named by the plant file (imported with the user's
+opt-in, ``allow_import=True``), and name clashes."""
 
 from pathlib import Path
 
@@ -41,7 +42,7 @@ def plant_with(tmp_path, module, cls):
 
 
 def test_plugin_component_from_a_plant_file(tmp_path):
-    loaded = load(plant_with(tmp_path, "my_components_a", "HalfValve"))
+    loaded = load(plant_with(tmp_path, "my_components_a", "HalfValve"), allow_import=True)
     assert type(loaded.plant.components["valve"]).__name__ == "HalfValve"
     assert loaded.spec.imports == ["my_components_a"]
     res = loaded.plant.simulate(t_end=60.0)
@@ -58,7 +59,7 @@ def test_plugin_component_from_a_plant_file(tmp_path):
 
 def test_a_name_clash_is_an_error(tmp_path):
     with pytest.raises(PlantError, match="clashes with 'Pipe'"):
-        load(plant_with(tmp_path, "my_components_b", "Pipe"))
+        load(plant_with(tmp_path, "my_components_b", "Pipe"), allow_import=True)
 
 
 def test_an_unknown_module_is_located(tmp_path):
@@ -66,4 +67,4 @@ def test_an_unknown_module_is_located(tmp_path):
     text = text.replace('medium = "Air"', 'medium = "Air"\nimport = ["no_such_module_x"]', 1)
     (tmp_path / "p.toml").write_text(text)
     with pytest.raises(PlantError, match=r"\[plant\], key 'import'.*no module 'no_such_module_x'"):
-        load(tmp_path / "p.toml")
+        load(tmp_path / "p.toml", allow_import=True)

@@ -942,6 +942,18 @@ class Component:
         return False
 
     # ------------------------------------------------------------------ media
+    #: medium groups (``medium_groups``) that hold a liquid and its vapour in
+    #: equilibrium and so need a two-phase (condensable) medium; the compiler refuses
+    #: a gas there with a message naming the component (a drum: ("fluid",))
+    TWO_PHASE_GROUPS: tuple[str, ...] = ()
+
+    def signal_range(self, name: str):
+        """Bounds of the signal output ``name`` that the component's geometry sets:
+        ``(lo, hi, unit, words)`` with ``lo < value < hi`` in SI, or None (the
+        default: no bounds). A drum's level lies below its top V_t/A; ``dnasim
+        check`` compares controllers' set points with it (``compiler._vessel_problems``)."""
+        return None
+
     def medium_groups(self) -> list[tuple[str, str, list[str]]]:
         """Groups of fluid ports that carry one fluid: [(group, parameter, ports)].
 

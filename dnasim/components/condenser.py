@@ -176,6 +176,15 @@ class Condenser(Component):
             ]
         return out
 
+    TWO_PHASE_GROUPS = ("shell",)  # steam condensing in its shell: a condensable medium
+
+    def signal_range(self, name):
+        """The hotwell level stays inside the shell: level < V/A_hotwell."""
+        if name != "level":
+            return None
+        V, A = self.params["V"], self.params["A_hotwell"]
+        return 0.0, V / A, "m", f"the shell's top, V/A_hotwell = {V / A:.6g} m"
+
     def medium_groups(self):
         groups = [("shell", "medium", ["steam_in", "condensate_out"])]
         if self.water:

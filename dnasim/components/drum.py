@@ -128,6 +128,21 @@ class _SaturatedVessel(Component):
     #: (port, role, phase delivered on outflow "liquid"/"vapour", doc)
     PORTS: tuple = ()
     HAS_BUBBLES = False
+    TWO_PHASE_GROUPS = ("fluid",)  # saturated liquid and vapour: a condensable medium
+
+    def signal_range(self, name):
+        """The level and V_l stay inside the vessel: 0 < V_l < V_t, level < V_t/A."""
+        V_t, A = self.params["V_t"], self.params["A"]
+        if name == "V_l":
+            return 0.0, V_t, "m3", f"the vessel's volume V_t = {V_t:.6g} m3"
+        if name == "level":
+            return (
+                0.0,
+                V_t / A,
+                "m",
+                f"its top, V_t/A = {V_t:.6g} m3 / {A:.6g} m2 = {V_t / A:.6g} m",
+            )
+        return None
 
     COMMON_PARAMS = (
         Param("V_t", "m3", doc="total inner volume V_t", min=0.0),

@@ -34,7 +34,10 @@ class Pipe(Component):
                           or T_w[i] = T_i when C_wall = kA = 0 (adiabatic, no wall)
       density[i]          M[i] = V_i rho(p_v[i], h_v[i])                 (10.12d)
       internal_energy[i]  U[i] = M[i] u_i              ("outlet", mixed volume: default)
-                          U[i] = M[i] (u_a + u_i)/2    (10.12c, "mean": u_a = inflow state)
+                          U[i] = M[i] (u_a + u_i)/2    (10.12c, "mean": u_a = inflow state;
+                          the seed's option, not physical: after a step of the inflow the
+                          outflow first jumps the other way, and a gas may leave colder
+                          than anything in the plant)
       heat[i]             Q[i] = kA_i LMTD(T_a - T_w[i], T_i - T_w[i])  (10.12e, "lmtd")
                           (or kA_i (T_i - T_w[i]) "outlet", kA_i ((T_a + T_i)/2 - T_w[i]) "mean")
       momentum[i]         p_left - p_v[i] = k_i m[i] sqrt(m[i]^2 + m_reg^2)/rho_f + rho_f g dz/n
@@ -88,7 +91,9 @@ class Pipe(Component):
             "1",
             None,
             "U = M u_out ('outlet': mixed volume, default) or U = M (u_in+u_out)/2 ('mean', "
-            "seed eq. 10.12c; jumps opposite to an inlet step)",
+            "seed eq. 10.12c; jumps opposite to an inlet step, and a gas may leave colder than "
+            "anything in the plant: not physical, kept as the seed's option; dnasim check "
+            "notes it)",
             kind="string",
             choices=("mean", "outlet"),
         ),

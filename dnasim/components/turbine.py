@@ -15,7 +15,7 @@ from dnasim.components.base import (
     shaft_work_equations,
 )
 from dnasim.components.physics import upwind_mean
-from dnasim.errors import PlantError
+from dnasim.errors import PlantError, ResidualDomainError
 from dnasim.media.isentropic import h_isentropic
 
 
@@ -111,14 +111,33 @@ class SteamTurbine(Component):
     def K_t(self) -> float:
         """Stodola constant [m2] (from the nominal point on first use: needs the medium)."""
         if self._K_t is None:
-            P = self.params
-            p1, p2 = P["p_in_nominal"], P["p_out_nominal"]
-            h1 = P["h_in_nominal"]
+            self._K_t = self._nominal_K_t()
+        return self._K_t
+
+    def _nominal_K_t(self) -> float:
+        """K_t [m2] from the nominal point (m_nominal, p_in_nominal, p_out_nominal and
+        T_in_nominal or h_in_nominal); a nominal inlet state outside the medium's range
+        is a ``PlantError`` naming the key."""
+        P = self.params
+        p1, p2 = P["p_in_nominal"], P["p_out_nominal"]
+        h1 = P["h_in_nominal"]
+        key = "h_in_nominal" if h1 is not None else "T_in_nominal"
+        try:
             if h1 is None:
                 h1 = self.medium.h_pT(p1, P["T_in_nominal"])
             rho1 = self.medium.state(p1, h1).rho
-            self._K_t = P["m_nominal"] / math.sqrt(p1 * rho1 * (1.0 - (p2 / p1) ** 2))
-        return self._K_t
+        except ResidualDomainError as exc:  # a parameter's state: it never changes
+            given = (
+                f"T_in_nominal = {P['T_in_nominal']:.6g} K"
+                if key == "T_in_nominal"
+                else f"h_in_nominal = {h1:.6g} J/kg"
+            )
+            raise PlantError(
+                f"component '{self.name}' (SteamTurbine), key '{key}': the nominal inlet "
+                f"state (p_in_nominal = {p1 / 1e5:.6g} bar, {given}) is outside the "
+                f"medium's range: {exc}"
+            ) from None
+        return P["m_nominal"] / math.sqrt(p1 * rho1 * (1.0 - (p2 / p1) ** 2))
 
     def fluid_ports(self):
         return flow_through_ports(self.m_eps, "h_2")
@@ -183,6 +202,8 @@ class SteamTurbine(Component):
             out["inlet"] = (P["p_in_nominal"], None)
         if self._K_t is None and P["p_out_nominal"] is not None:
             out["outlet"] = (P["p_out_nominal"], None)
+            if self.medium is not None:
+                self._nominal_K_t()  # the nominal point's state, checked before any numerics
         return out
 
     def initial_guess(self, t0, x):
