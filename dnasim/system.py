@@ -33,7 +33,10 @@ Global equations F:
     h_out_k the enthalpy component k delivers when fluid leaves it through that
     port (``FluidPort.h_out``), and w_k(m) = (m + sqrt(m^2 + eps_k^2))/2 the smooth
     upwind weight with the port's flow scale eps_k = ``FluidPort.m_eps``
-    (``physics.upwind_weight``: w(m) - w(-m) = m, w(0) = eps/2 > 0). Probes carry
+    (``physics.upwind_weight``: w(m) - w(-m) = m, w(0) = eps/2 > 0), a number, or
+    the name of one of the component's variables (a valve's band, which narrows
+    with its opening, ``physics.opening_band``; the tail keeps the scale of the
+    component's ``m_eps``). Probes carry
     no flow and take no part. So h_node is the flow-weighted mean of the
     enthalpies flowing in; at zero flow it is the eps-weighted mean, and the
     Jacobian stays regular.
@@ -310,6 +313,7 @@ class System:
         node_names = plant.node_names()
         n_nodes = len(node_names)
         entries = []  # (node number, flow index, sign, h_out index, eps)
+        eps_vars = []  # (entry number, index of the variable that holds eps)
         for j, node in enumerate(node_names):
             eq_names.append(f"{node}.mass")
             eq_owner.append(node)
@@ -328,7 +332,11 @@ class System:
                         "port values"
                     ) from None
                 sign = 1.0 if port.role == "outlet" else -1.0
-                entries.append((j, g, sign, gh, float(port.m_eps)))
+                if isinstance(port.m_eps, str):  # a variable of the component (a valve's band)
+                    eps_vars.append((len(entries), b.gidx[b.index[port.m_eps]]))
+                    entries.append((j, g, sign, gh, float(b.comp.m_eps)))  # the tail's scale
+                else:
+                    entries.append((j, g, sign, gh, float(port.m_eps)))
                 cols.append(g)
             rows_y.append(cols)
             rows_yp.append([])
@@ -340,6 +348,7 @@ class System:
             for jj, g, _, gh, _ in entries:
                 if jj == j:
                     cols += [g, gh]
+            cols += [ge for e, ge in eps_vars if entries[e][0] == j]
             rows_y.append(cols)
             rows_yp.append([])
         n = len(names)
@@ -349,6 +358,8 @@ class System:
         self._mix_sign = e[:, 2]
         self._mix_hout = e[:, 3].astype(np.intp)
         self._mix_eps = e[:, 4]
+        ev = np.array(eps_vars, dtype=np.intp).reshape(-1, 2)
+        self._mix_eps_at, self._mix_eps_var = ev[:, 0], ev[:, 1]
         self._node_h = np.array([self.node_index[nd] + 1 for nd in node_names], dtype=np.intp)
         self._mix_hnode = self._node_h[self._mix_node]
         self.n_nodes = n_nodes
@@ -447,7 +458,9 @@ class System:
         blocks = cache.get(which)
         if blocks is None:
             blocks = cache[which] = evaluation_units([self.blocks[k] for k in which])
-        node_cols = np.concatenate((self._mix_flow, self._mix_hout, self._node_h))
+        node_cols = np.concatenate(
+            (self._mix_flow, self._mix_hout, self._node_h, self._mix_eps_var)
+        )
         nodes = bool(touched[node_cols].any())
 
         def F_cols(t, y, yp, f0):
@@ -510,7 +523,12 @@ class System:
         ``inflow``: the port flows into the nodes, sign * y[flow], when known."""
         if inflow is None:
             inflow = self._mix_sign * y[self._mix_flow]
-        w = upwind_weight(inflow, self._mix_eps)
+        if self._mix_eps_var.size:  # bands held by variables (valves: by their opening)
+            band = self._mix_eps.copy()
+            band[self._mix_eps_at] = y[self._mix_eps_var]
+            w = upwind_weight(inflow, self._mix_eps, band)
+        else:
+            w = upwind_weight(inflow, self._mix_eps)
         terms = w * (y[self._mix_hout] - y[self._mix_hnode])
         return np.bincount(self._mix_node, weights=terms, minlength=self.n_nodes)
 

@@ -210,6 +210,8 @@ class FluidPort:
     of "resistance" (e.g. "k" of a Pipe with k = 0), named in structure messages.
     m_eps: flow scale [kg/s] of the smooth upwind weight w(m) at this port
     (``physics.upwind_weight``); the node's mixing equation uses the same value.
+    A number, or the local name of a variable of the component that holds it (a
+    valve's band, which narrows with its opening: ``physics.opening_band``).
     """
 
     name: str
@@ -220,16 +222,17 @@ class FluidPort:
     h_out: str | None = None
     h_source: bool = True
     pressure_param: str | None = None
-    m_eps: float = 1e-6
+    m_eps: float | str = 1e-6
 
 
-def flow_through_ports(m_eps: float, outlet_h: str = "inlet.h") -> list[FluidPort]:
+def flow_through_ports(m_eps: float | str, outlet_h: str = "inlet.h") -> list[FluidPort]:
     """The inlet and outlet of a component without storage whose one mass flow
     variable ``m`` [kg/s] passes both ports (valves, pumps, turbines). Fluid leaving
     through the inlet (reverse flow) carries the outlet node's h; fluid leaving
     through the outlet carries ``outlet_h``: the inlet node's h for a throttle
     (isenthalpic), the component's own outlet enthalpy (e.g. "h_2") for a machine.
-    ``m_eps`` [kg/s]: the flow scale of the upwind weight at both ports."""
+    ``m_eps`` [kg/s]: the flow scale of the upwind weight at both ports (a number, or
+    the name of the variable holding it)."""
     return [
         FluidPort(
             "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=m_eps

@@ -16,7 +16,7 @@ from dnasim.components.base import (
     Variable,
     flow_through_ports,
 )
-from dnasim.components.physics import softplus, upwind_mean, valve_flow
+from dnasim.components.physics import fixed_value, opening_band, softplus, upwind_mean, valve_flow
 from dnasim.errors import PlantError
 
 #: Kv [m3/h] -> K [m2] in m = K sqrt(rho dp): Kv is the water flow in m3/h at
@@ -94,7 +94,11 @@ class ControlValve(Component):
     inlet node's h and vice versa), the flow is odd in dp with a finite slope at
     dp = 0 (index 1 at zero flow), and a closed valve keeps its leakage. A signal
     z is used as given, not clipped (as in ``Valve``): limit the driving
-    controller's output to [0, 1].
+    controller's output to [0, 1]. The upwind band at both ports narrows with the
+    opening, m_eps = 1e-3 m_nominal sqrt(z_e^2 + 1e-6) [kg/s]
+    (``physics.opening_band``; a variable when the opening changes): a closed valve exchanges nothing but its leakage
+    between its nodes, so a stagnant node behind it (a pump's discharge against a
+    shut feed valve) keeps the state of the side it receives fluid from.
     """
 
     PARAMS = (
@@ -170,6 +174,13 @@ class ControlValve(Component):
         P = self.params
         name = f"component '{self.name}' ({type(self).__name__})"
         self.opening_from_signal = self.HAS_OPENING and P["opening"] is None
+        #: the band follows an opening that changes (signal, time function, or a check
+        #: valve's pressure difference) in the variable m_eps; a fixed one's is a number
+        self.band_variable = (
+            not self.HAS_OPENING
+            or self.opening_from_signal
+            or not fixed_value(P["opening"])
+        )
         given = [k for k in ("Kv", "Cv", "dp_nominal") if P[k] is not None]
         if P["law"] == "linear":
             if P["C_lin"] is None and P["dp_nominal"] is None:
@@ -198,18 +209,34 @@ class ControlValve(Component):
         self._K = None
 
     def fluid_ports(self):
-        return flow_through_ports(self.m_eps, "inlet.h")
+        if self.band_variable:
+            return flow_through_ports("m_eps", "inlet.h")
+        return flow_through_ports(opening_band(self.m_eps, self.effective_opening(0.0, {})), "inlet.h")
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.opening_from_signal else []
 
     def variables(self):
-        return [Variable("m", "kg/s", self.params["m_nominal"], doc="mass flow")]
+        out = [Variable("m", "kg/s", self.params["m_nominal"], doc="mass flow")]
+        if self.band_variable:
+            out.append(
+                Variable(
+                    "m_eps",
+                    "kg/s",
+                    self.m_eps,
+                    doc="upwind band at the ports, 1e-3 m_nominal z_e (physics.opening_band)",
+                )
+            )
+        return out
+
+    #: what the opening depends on (the band equation's dependencies besides m_eps)
+    def _opening_reads(self):
+        return ("z",) if self.opening_from_signal else ()
 
     def equations(self):
         dep = ("m", "inlet.p", "inlet.h", "outlet.p", "outlet.h")
         dep += ("z",) if self.opening_from_signal else ()
-        return [
+        out = [
             Equation(
                 "flow",
                 y=dep,
@@ -218,6 +245,21 @@ class ControlValve(Component):
                 residual=lambda t, x, xp: x["m"] - self.flow(t, x),
             )
         ]
+        if self.band_variable:
+            out.append(
+                Equation(
+                    "band",
+                    y=("m_eps",) + self._opening_reads(),
+                    unit="kg/s",
+                    doc="m_eps = 1e-3 m_nominal sqrt(z_e^2 + 1e-6)",
+                    residual=lambda t, x, xp: x["m_eps"] - self.band(t, x),
+                )
+            )
+        return out
+
+    def band(self, t, x) -> float:
+        """m_eps [kg/s] at the ports: ``physics.opening_band`` of the effective opening."""
+        return opening_band(self.m_eps, self.effective_opening(t, x))
 
     def outputs(self):
         return [
@@ -327,6 +369,11 @@ class ControlValve(Component):
             x["m"] = self.params["m_nominal"]
         if self.opening_from_signal:
             x["m"] = 0.5 * self.params["m_nominal"]
+        if self.band_variable:
+            try:
+                x["m_eps"] = self.band(t0, x)
+            except Exception:
+                x["m_eps"] = self.m_eps
 
 
 class CheckValve(ControlValve):
@@ -341,7 +388,8 @@ class CheckValve(ControlValve):
     difference: the valve is shut and passes its leakage (default 1e-6 of the open
     flow, in the reverse direction), so the node pressures stay determined and
     the DAE index 1. dp_open [Pa] is the pressure difference at which the valve
-    is fully open (its cracking band).
+    is fully open (its cracking band). The upwind band follows the opening as in
+    ``ControlValve``: the shut check valve passes its leakage and nothing else.
     """
 
     HAS_OPENING = False
@@ -362,5 +410,9 @@ class CheckValve(ControlValve):
         dp = x["inlet.p"] - x["outlet.p"]
         return smooth_step(dp / self.params["dp_open"])
 
+    def _opening_reads(self):
+        return ("inlet.p", "outlet.p")
+
     def initial_guess(self, t0, x):
         x["m"] = self.flow(t0, x)
+        x["m_eps"] = self.band(t0, x)  # a check valve's band is always a variable

@@ -17,7 +17,13 @@ from dnasim.components.base import (
     flow_through_ports,
     shaft_work_equations,
 )
-from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean, upwind_weight
+from dnasim.components.physics import (
+    M_REG_REL,
+    G,
+    reverse_fraction,
+    softplus,
+    upwind_weight,
+)
 from dnasim.errors import PlantError
 
 
@@ -250,10 +256,10 @@ class Pump(Component):
 
     def fluid_ports(self):
         ports = flow_through_ports(self.m_eps, "h_2")
-        if self.casing:  # the casing's fluid leaves at both ports
-            ports[0] = FluidPort(
-                "inlet", "inlet", "m", "resistance", h_out="h_2", h_source=False, m_eps=self.m_eps
-            )
+        # reverse flow leaves through the inlet with h_1 (``reverse`` equation)
+        ports[0] = FluidPort(
+            "inlet", "inlet", "m", "resistance", h_out="h_1", h_source=False, m_eps=self.m_eps
+        )
         return ports
 
     def signal_inputs(self):
@@ -278,6 +284,12 @@ class Pump(Component):
                 doc="shaft work done on the fluid, integral of P dt",
                 accumulator=True,
             ),
+            Variable(
+                "h_1",
+                "J/kg",
+                1e5,
+                doc="enthalpy of the fluid leaving through the inlet (reverse flow)",
+            ),
         ]
 
     def equations(self):
@@ -295,9 +307,39 @@ class Pump(Component):
                     doc="h_2 = h_in + softplus(p_out - p_in)/(rho eta)",
                     residual=self._enthalpy,
                 ),
+                Equation(
+                    "power",
+                    y=("P", "m", "h_2", "h_1", "inlet.h", "outlet.h"),
+                    unit="W",
+                    doc="P = w(m) (h_2 - h_in) + w(-m) (h_1 - h_out)",
+                    residual=self._power,
+                ),
             ]
-            + shaft_work_equations(self, "inlet.h", "h_2")
+            + shaft_work_equations(self, "inlet.h", "h_2")[1:]  # work: dW/dt = P
+            + [self._reverse_equation("outlet.h")]
         )
+
+    def _reverse_equation(self, h_back):
+        """h_1 = sigma(m) h_back + (1 - sigma(m)) h_in: what leaves through the inlet."""
+        return Equation(
+            "reverse",
+            y=("h_1", "m", "inlet.h", h_back),
+            unit="J/kg",
+            doc=f"h_1 = sigma(m) {h_back} + (1 - sigma(m)) h_in",
+            residual=lambda t, x, xp: x["h_1"] - self.reverse_enthalpy(x, x[h_back]),
+        )
+
+    def reverse_enthalpy(self, x, h_back) -> float:
+        """h_1 [J/kg]: h_back (the discharge node's h; with the casing, h_2) for
+        m <= -m_eps, the suction node's own h for m >= 0 (``physics.reverse_fraction``)."""
+        s = reverse_fraction(x["m"], self.m_eps)
+        return s * h_back + (1.0 - s) * x["inlet.h"]
+
+    def _power(self, t, x, xp):
+        m = x["m"]
+        w = float(upwind_weight(m, self.m_eps))
+        w_back = float(upwind_weight(-m, self.m_eps))
+        return x["P"] - w * (x["h_2"] - x["inlet.h"]) - w_back * (x["h_1"] - x["outlet.h"])
 
     def _head_equations(self, n, nodes):
         """The head curve and the pressure rise; nodes: the variables rho is read from."""
@@ -335,15 +377,16 @@ class Pump(Component):
                 ),
                 Equation(
                     "energy",
-                    y=("h_2", "m", "P", "inlet.h", "outlet.h"),
+                    y=("h_2", "m", "P", "h_1", "inlet.h", "outlet.h"),
                     yp=("h_2",),
                     unit="W",
-                    doc=f"{M:g} dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_2) + P",
+                    doc=f"{M:g} dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_1) + P",
                     residual=self._casing_energy,
                 ),
             ]
-            + shaft_work_equations(self, "inlet.h", "h_2")[1:]
-        )  # work: dW/dt = P
+            + shaft_work_equations(self, "inlet.h", "h_2")[1:]  # work: dW/dt = P
+            + [self._reverse_equation("h_2")]
+        )
 
     def shaft_power(self, t, x) -> float:
         """P [W] with the casing: w(m) softplus(dp, dp_reg)/(rho eta) + P_0 r^3."""
@@ -358,7 +401,7 @@ class Pump(Component):
         m, h = x["m"], x["h_2"]
         w_in = float(upwind_weight(m, self.m_eps))
         w_back = float(upwind_weight(-m, self.m_eps))
-        gain = w_in * (x["inlet.h"] - h) + w_back * (x["outlet.h"] - h) + x["P"]
+        gain = w_in * (x["inlet.h"] - h) + w_back * (x["outlet.h"] - x["h_1"]) + x["P"]
         return self.params["M_casing"] * xp["h_2"] - gain
 
     def outputs(self):
@@ -382,9 +425,12 @@ class Pump(Component):
         medium = self.medium
         if self.casing:
             return float(medium.state(x["inlet.p"], x["h_2"]).rho)
-        rho_in = medium.state(x["inlet.p"], x["inlet.h"]).rho
-        rho_out = medium.state(x["outlet.p"], x["outlet.h"]).rho
-        return float(upwind_mean(x["m"], rho_in, rho_out, self.m_eps))
+        rho_in = float(medium.state(x["inlet.p"], x["inlet.h"]).rho)
+        s = reverse_fraction(x["m"], self.m_eps)
+        if s == 0.0:
+            return rho_in
+        rho_out = float(medium.state(x["outlet.p"], x["outlet.h"]).rho)
+        return s * rho_out + (1.0 - s) * rho_in
 
     def head(self, Q, r, rho):
         """H(Q, r) [m] at volume flow Q [m3/s], relative speed r, density rho [kg/m3]."""
@@ -447,6 +493,7 @@ class Pump(Component):
             x["P"] += self.params["P_shutoff"] * r**3
             x["h_2"] += self.params["P_shutoff"] * r**3 / mn
         x["W"] = 0.0
+        x["h_1"] = x["inlet.h"]
         # the discharge node: the pump's pressure rise on the suction guess
         x["outlet.p"] = max(x["inlet.p"] + rho * G * H, x["inlet.p"])
         x["outlet.h"] = x["h_2"]
