@@ -13,18 +13,27 @@ from dnasim.components.base import (
     Output,
     Param,
     SignalPort,
+    Switch,
     Variable,
     flow_through_ports,
     shaft_work_equations,
 )
+from dnasim.components.control_valve import vapour_pressure
 from dnasim.components.physics import (
     M_REG_REL,
     G,
+    is_condensable,
     reverse_fraction,
+    saturation_enthalpies,
     softplus,
     upwind_weight,
 )
 from dnasim.errors import PlantError
+
+#: head [m] added to the cavitation switch function for reverse flow (m <= -m_eps,
+#: weighted by physics.reverse_fraction): a pump that does not draw from its suction
+#: does not cavitate; the margin is the shut-off head plus this
+NPSH_REVERSE_MARGIN = 10.0
 
 
 class Pump(Component):
@@ -162,6 +171,32 @@ class Pump(Component):
             "shaft power at zero flow and nominal speed, P_0 (with M_casing)",
             min=0.0,
         ),
+        Param(
+            "A_suction",
+            "m2",
+            None,
+            "flow area of the suction nozzle: adds the velocity head to NPSH_a",
+            min=0.0,
+        ),
+        Param("NPSH_r", "m", None, "NPSH required at nominal speed (a number)", min=0.0),
+        Param(
+            "NPSH_r_Q",
+            "m3/s",
+            None,
+            "volume flows [m3/s] of an NPSH-required curve (nominal speed)",
+            kind="array",
+        ),
+        Param(
+            "NPSH_r_values", "m", None, "NPSH required [m] at NPSH_r_Q", min=0.0, kind="array"
+        ),
+        Param(
+            "cavitation",
+            "1",
+            "stop",
+            "when NPSH_a falls below NPSH_r (or the suction flashes): stop the run, or warn",
+            kind="string",
+            choices=("stop", "warn"),
+        ),
     )
     FLUID_PORTS = (
         FluidPort("inlet", "inlet", "m", "resistance", "suction"),
@@ -193,6 +228,7 @@ class Pump(Component):
                 f"component '{self.name}' (Pump): the head curve's quadratic coefficient b = "
                 f"{self.b:g} s2/m5 must be < 0 (the head must fall with the flow)"
             )
+        self._npsh_r = self._npsh_curve()
         self._eta_table = None
         if (P["eta_Q"] is None) != (P["eta_values"] is None):
             raise PlantError(
@@ -211,6 +247,27 @@ class Pump(Component):
             self._eta_table = (PchipInterpolator(q, e), q[0], q[-1])
         elif P["eta"] <= 0:
             raise PlantError(f"component '{self.name}' (Pump): parameter 'eta' must be > 0")
+
+    def _npsh_curve(self):
+        """NPSH_r_1(q) [m] at nominal speed: None, a number, or a PCHIP of the points
+        NPSH_r_Q, NPSH_r_values held at its end values."""
+        P = self.params
+        name = f"component '{self.name}' (Pump)"
+        if (P["NPSH_r_Q"] is None) != (P["NPSH_r_values"] is None):
+            raise PlantError(f"{name}: give both 'NPSH_r_Q' and 'NPSH_r_values'")
+        if P["NPSH_r_Q"] is not None:
+            if P["NPSH_r"] is not None:
+                raise PlantError(f"{name}: give NPSH_r as a number or as a curve, not both")
+            q, v = np.asarray(P["NPSH_r_Q"]), np.asarray(P["NPSH_r_values"])
+            if q.size != v.size or q.size < 2 or np.any(np.diff(q) <= 0):
+                raise PlantError(
+                    f"{name}: 'NPSH_r_Q' must rise strictly and have as many (at least 2) "
+                    "entries as 'NPSH_r_values'"
+                )
+            from scipy.interpolate import PchipInterpolator
+
+            return (PchipInterpolator(q, v), float(q[0]), float(q[-1]))
+        return P["NPSH_r"]
 
     def _curve(self):
         """(H0 [m], a [s/m2], b [s2/m5]) from whichever way the curve was given."""
@@ -405,10 +462,124 @@ class Pump(Component):
         return self.params["M_casing"] * xp["h_2"] - gain
 
     def outputs(self):
-        return [Output("T_2", "K", "temperature at h_2 and the discharge pressure")]
+        out = [Output("T_2", "K", "temperature at h_2 and the discharge pressure")]
+        if self.npsh_checked:
+            out.append(Output("NPSH_a", "m", "net positive suction head available"))
+            if self._npsh_r is not None:
+                out.append(Output("NPSH_r", "m", "net positive suction head required"))
+        return out
 
     def output_values(self, t, x, xp):
-        return [float(self.medium.state(x["outlet.p"], x["h_2"]).T)]
+        out = [float(self.medium.state(x["outlet.p"], x["h_2"]).T)]
+        if self.npsh_checked:
+            out.append(self.npsh_available(x))
+            if self._npsh_r is not None:
+                out.append(self.npsh_required(t, x))
+        return out
+
+    # ------------------------------------------------------------------ NPSH
+    @property
+    def npsh_checked(self) -> bool:
+        """True for a condensable medium (a liquid that can flash at the suction)."""
+        return self.medium is None or is_condensable(self.medium)
+
+    def suction_state(self, x):
+        """(rho [kg/m3], T [K], T_sat [K] or nan, h' [J/kg] or nan) at the suction node."""
+        medium = self.medium
+        p, h = x["inlet.p"], x["inlet.h"]
+        st = medium.state(p, h)
+        hl, _ = saturation_enthalpies(medium, p)
+        hl = float(hl[0])
+        T_sat = float(medium.state(p, hl).T) if math.isfinite(hl) else math.nan
+        return float(st.rho), float(st.T), T_sat, hl
+
+    def npsh_available(self, x) -> float:
+        """NPSH_a [m] at the suction node (p_in, h_in); see the class doc."""
+        p, h = x["inlet.p"], x["inlet.h"]
+        rho, T, _, hl = self.suction_state(x)
+        A = self.params["A_suction"]
+        v = x["m"] / (rho * A) if A else 0.0
+        head = v * v / (2.0 * G)
+        if math.isfinite(hl) and h > hl:  # flashing: the enthalpy above h' as head
+            return head - (h - hl) / G
+        p_v, _ = vapour_pressure(self.medium, T)
+        return (p - p_v) / (rho * G) + head
+
+    def npsh_required(self, t, x) -> float:
+        """NPSH_r(Q, r) = r^2 NPSH_r_1(Q/r) [m] (affinity law); 0 without a given NPSH_r."""
+        f = self._npsh_r
+        if f is None:
+            return 0.0
+        r = self.speed(t, x)
+        if not isinstance(f, tuple):
+            return float(f) * r * r
+        curve, q0, q1 = f
+        rho = self.density(x)
+        q = min(max(x["m"] / rho / max(r, 1e-3), q0), q1)
+        return float(curve(q)) * r * r
+
+    def cavitation_margin(self, t, x) -> float:
+        """NPSH_a - NPSH_r [m], plus (H0 + 10 m) sigma(m) for reverse flow (no suction)."""
+        lift = (self.H0 + NPSH_REVERSE_MARGIN) * reverse_fraction(x["m"], self.m_eps)
+        return self.npsh_available(x) - self.npsh_required(t, x) + lift
+
+    def cavitation_message(self, t, x) -> str:
+        a, r = self.npsh_available(x), self.npsh_required(t, x)
+        _, T, T_sat, _ = self.suction_state(x)
+        p = x["inlet.p"]
+        what = (
+            "the suction flashes (NPSH_a < 0: the inlet enthalpy is above that of "
+            "saturated liquid)"
+            if a < 0.0 or self._npsh_r is None
+            else f"NPSH available {a:.4g} m < NPSH required {r:.4g} m"
+        )
+        sat = f", saturation {T_sat - 273.15:.2f} °C" if math.isfinite(T_sat) else ""
+        return (
+            f"pump '{self.name}' (Pump): cavitation at t = {t:.6g} s: {what}; NPSH_a = "
+            f"{a:.4g} m, NPSH_r = {r:.4g} m, suction {p / 1e5:.6g} bar, "
+            f"{T - 273.15:.2f} °C{sat}, flow {x['m']:.4g} kg/s. Raise the suction head "
+            "(a suction pipe with dz < 0 from the vessel above the pump), subcool the "
+            "suction, or give cavitation = \"warn\" to go on"
+        )
+
+    def switches(self):
+        if not self.npsh_checked:
+            return []
+        last = {}
+
+        def g(t, x, xp):
+            last["t"], last["x"] = t, {k: x[k] for k in self._npsh_reads()}
+            return self.cavitation_margin(t, x)
+
+        def message(t):
+            x = last.get("x")
+            return self.cavitation_message(t, x) if x is not None else None
+
+        return [
+            Switch(
+                "cavitation",
+                g,
+                direction=-1,
+                terminal=self.params["cavitation"] == "stop",
+                message=message,
+                doc="NPSH_a - NPSH_r [m] (+ margin for reverse flow): falls through 0",
+            )
+        ]
+
+    def _npsh_reads(self):
+        n = ("n",) if self.speed_from_signal else ()
+        extra = ("outlet.p", "outlet.h") + (("h_2",) if self.casing else ())
+        return ("m", "inlet.p", "inlet.h") + extra + n
+
+    def init_discrete_state(self, t0, x, xp):
+        """A pump that cavitates at the start: PlantError (cavitation = "stop"), or a
+        warning in its modes (``modes["warning"]``, printed after the run)."""
+        if self.npsh_checked and self.cavitation_margin(t0, x) < 0.0:
+            text = self.cavitation_message(t0, x).replace("cavitation at", "cavitates at the start,")
+            if self.params["cavitation"] == "stop":
+                raise PlantError(text)
+            x.modes["warning"] = text
+        return False
 
     # --------------------------------------------------------------- physics
     def speed(self, t, x):

@@ -11,7 +11,7 @@ from dnasim.components.base import (
     Variable,
     flow_through_ports,
 )
-from dnasim.components.physics import fixed_value, opening_band, valve_flow
+from dnasim.components.physics import valve_flow
 
 
 class Valve(Component):
@@ -38,12 +38,6 @@ class Valve(Component):
     of the full-open flow, and dm/dp stays > 0, so that a node between the closed
     valve and another volume-less component (a second valve, a mass-flow source)
     still has an equation for its pressure and the plant stays index 1.
-
-    The upwind band at both ports narrows with the opening,
-    m_eps = 1e-3 m_nominal sqrt(z_e^2 + 1e-6) [kg/s] (``physics.opening_band``; a
-    variable when the opening changes, a signal or a time function): a closed
-    valve exchanges nothing but its leakage between its two nodes, so a stagnant
-    node behind it keeps the state of the side it receives fluid from.
     """
 
     PARAMS = (
@@ -79,52 +73,26 @@ class Valve(Component):
 
     def setup(self):
         self.opening_from_signal = self.params["opening"] is None
-        #: the band follows an opening that changes (a signal or a time function) in
-        #: the variable m_eps; a fixed opening's band is a number
-        self.band_variable = self.opening_from_signal or not fixed_value(self.params["opening"])
 
     def fluid_ports(self):
-        if self.band_variable:
-            return flow_through_ports("m_eps", "inlet.h")
-        return flow_through_ports(opening_band(self.m_eps, self.effective_opening(0.0)), "inlet.h")
+        return flow_through_ports(self.m_eps, "inlet.h")
 
     def signal_inputs(self):
         return list(self.SIGNAL_INPUTS) if self.opening_from_signal else []
 
     def variables(self):
-        out = [Variable("m", "kg/s", self.params["m_nominal"], doc="mass flow")]
-        if self.band_variable:
-            out.append(
-                Variable(
-                    "m_eps",
-                    "kg/s",
-                    self.m_eps,
-                    doc="upwind band at the ports, 1e-3 m_nominal z_e (physics.opening_band)",
-                )
-            )
-        return out
+        return [Variable("m", "kg/s", self.params["m_nominal"], doc="mass flow")]
 
     def equations(self):
-        """The flow (and band) equations of the class doc (residuals: ``row_values``)."""
-        z = ("z",) if self.opening_from_signal else ()
-        out = [
+        """The flow equation of the class doc (its residual: ``row_values``)."""
+        return [
             Equation(
                 "flow",
-                y=("m", "inlet.p", "outlet.p") + z,
+                y=self.row_reads()[0],
                 unit="kg/s",
                 doc="m = C z_eff sqrt(dp) (regularised near dp = 0)",
             )
         ]
-        if self.band_variable:
-            out.append(
-                Equation(
-                    "band",
-                    y=("m_eps",) + z,
-                    unit="kg/s",
-                    doc="m_eps = 1e-3 m_nominal sqrt(z_e^2 + 1e-6)",
-                )
-            )
-        return out
 
     def effective_opening(self, t, z_signal=None) -> float:
         """z_e = leakage + (1 - leakage) z [1], z the signal input's value z_signal or
@@ -138,25 +106,17 @@ class Valve(Component):
         return self.effective_opening(t, x["z"] if self.opening_from_signal else None)
 
     def row_reads(self):
-        """The names ``row_values`` reads (``Component.row_reads``): m, inlet.p, outlet.p,
-        then z (signal opening), then m_eps (an opening that changes)."""
-        z = ("z",) if self.opening_from_signal else ()
-        return ("m", "inlet.p", "outlet.p") + z + (("m_eps",) if self.band_variable else ()), ()
+        """The names ``row_values`` reads (``Component.row_reads``)."""
+        return ("m", "inlet.p", "outlet.p") + (("z",) if self.opening_from_signal else ()), ()
 
     def row_values(self, t, v, vp, modes):
-        """The equations of the class doc, their residuals [kg/s]:
-        flow  m - C z_e (p_in - p_out) / ((p_in - p_out)^2 + dp_reg^2)^(1/4)
-        band  m_eps - opening_band(1e-3 m_nominal, z_e)    (an opening that changes)."""
+        """The equation of the class doc, its residual [kg/s]:
+        flow  m - C z_e (p_in - p_out) / ((p_in - p_out)^2 + dp_reg^2)^(1/4)."""
         m, p_in, p_out = v[0], v[1], v[2]
         z_e = self.effective_opening(t, v[3] if self.opening_from_signal else None)
-        flow = m - valve_flow(self.params["C"], z_e, p_in - p_out, self.params["dp_reg"])
-        if not self.band_variable:
-            return [flow]
-        return [flow, v[-1] - opening_band(self.m_eps, z_e)]
+        return [m - valve_flow(self.params["C"], z_e, p_in - p_out, self.params["dp_reg"])]
 
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
         z = self.opening(t0, x) if not self.opening_from_signal else 0.5
         x["m"] = valve_flow(self.params["C"], z, dp, self.params["dp_reg"])
-        if self.band_variable:
-            x["m_eps"] = opening_band(self.m_eps, z)
