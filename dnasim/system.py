@@ -415,6 +415,12 @@ class System:
             self.modes[b.comp.name].clear()
             b.comp.reset_discrete_state(self.modes[b.comp.name])
 
+    def warnings(self) -> list[str]:
+        """The components' warnings of the last start and run, in plain words: the
+        texts they put in their modes under "warnings" (a pump with cavitation =
+        "warn" when NPSH_a falls below NPSH_r, ``dnasim.components.pump``)."""
+        return [w for b in self.blocks for w in self.modes[b.comp.name].get("warnings", ())]
+
     def block(self, comp_name) -> ComponentBlock:
         for b in self.blocks:
             if b.comp.name == comp_name:

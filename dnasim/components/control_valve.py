@@ -96,7 +96,8 @@ class ControlValve(Component):
     z is used as given, not clipped (as in ``Valve``): limit the driving
     controller's output to [0, 1]. The upwind band at both ports narrows with the
     opening, m_eps = 1e-3 m_nominal sqrt(z_e^2 + 1e-6) [kg/s]
-    (``physics.opening_band``; a variable when the opening changes): a closed valve exchanges nothing but its leakage
+    (``physics.opening_band``; a variable when the opening changes): a closed
+    valve exchanges nothing but its leakage
     between its nodes, so a stagnant node behind it (a pump's discharge against a
     shut feed valve) keeps the state of the side it receives fluid from.
     """
@@ -174,12 +175,10 @@ class ControlValve(Component):
         P = self.params
         name = f"component '{self.name}' ({type(self).__name__})"
         self.opening_from_signal = self.HAS_OPENING and P["opening"] is None
-        #: the band follows an opening that changes (signal, time function, or a check
-        #: valve's pressure difference) in the variable m_eps; a fixed one's is a number
-        self.band_variable = (
-            not self.HAS_OPENING
-            or self.opening_from_signal
-            or not fixed_value(P["opening"])
+        #: the band follows an opening that changes (signal or time function) in the
+        #: variable m_eps; a fixed opening's band is a number (a check valve: none)
+        self.band_variable = self.HAS_OPENING and (
+            self.opening_from_signal or not fixed_value(P["opening"])
         )
         given = [k for k in ("Kv", "Cv", "dp_nominal") if P[k] is not None]
         if P["law"] == "linear":
@@ -211,6 +210,8 @@ class ControlValve(Component):
     def fluid_ports(self):
         if self.band_variable:
             return flow_through_ports(self.m_eps, "inlet.h", band="m_eps")
+        if not self.HAS_OPENING:  # a check valve: the full band (see CheckValve)
+            return flow_through_ports(self.m_eps, "inlet.h")
         band = opening_band(self.m_eps, self.effective_opening(0.0, {}))
         return flow_through_ports(self.m_eps, "inlet.h", band=band)
 
@@ -225,9 +226,9 @@ class ControlValve(Component):
                     "m_eps",
                     "kg/s",
                     # scale m_nominal: the band matters only where the flow is within
-                    # it, and a check valve's band follows its pressure difference
-                    # steeply (dz/d(dp) ~ 1/dp_open); on its own 1e-3 m_nominal scale
-                    # Newton had to resolve dp to 1e-3 Pa and stalled
+                    # it; on its own 1e-3 m_nominal scale it held Newton's convergence
+                    # test to what the node pressures do not resolve (a band following
+                    # a check valve's dp stalled Newton at dp ~ 1e-3 Pa)
                     self.params["m_nominal"],
                     doc="upwind band at the ports, 1e-3 m_nominal z_e (physics.opening_band)",
                 )
@@ -393,8 +394,12 @@ class CheckValve(ControlValve):
     difference: the valve is shut and passes its leakage (default 1e-6 of the open
     flow, in the reverse direction), so the node pressures stay determined and
     the DAE index 1. dp_open [Pa] is the pressure difference at which the valve
-    is fully open (its cracking band). The upwind band follows the opening as in
-    ``ControlValve``: the shut check valve passes its leakage and nothing else.
+    is fully open (its cracking band). Its upwind band is the full m_eps =
+    1e-3 m_nominal at any opening (not ``ControlValve``'s narrowing band): a check
+    valve shut in series with a shut control valve then still ties the node
+    between them to the pump's side (tests/field/feed_line_level_control.toml);
+    with both bands narrowed that node had no regular mixing equation at Newton
+    iterates whose small flows leave it, and the run stopped.
     """
 
     HAS_OPENING = False
@@ -415,9 +420,6 @@ class CheckValve(ControlValve):
         dp = x["inlet.p"] - x["outlet.p"]
         return smooth_step(dp / self.params["dp_open"])
 
-    def _opening_reads(self):
-        return ("inlet.p", "outlet.p")
-
     def initial_guess(self, t0, x):
         """Guessed half open (dp = dp_open/2: the outlet node's pressure guess lowered
         to that), whatever the nodes' guesses say: where the valve is shut or just shut
@@ -429,4 +431,3 @@ class CheckValve(ControlValve):
         if x["inlet.p"] - x["outlet.p"] < dp_half:
             x["outlet.p"] = x["inlet.p"] - dp_half
         x["m"] = self.flow(t0, x)
-        x["m_eps"] = self.band(t0, x)  # a check valve's band is always a variable

@@ -304,8 +304,9 @@ def opening_band(eps, z_e):
     20: two-phase at the pump's discharge). Band and tail are the same at both ports,
     so the valve stays energy-neutral (w(m) - w(-m) = m for any band).
 
-    Used by ``ControlValve`` and ``CheckValve``. The seed's ``Valve`` keeps its fixed
-    band, so that the plants written with it keep their numbers: the same narrowing
+    Used by ``ControlValve`` (a ``CheckValve`` keeps the full band: see its doc). The
+    seed's ``Valve`` keeps its fixed band, so that the plants written with it keep
+    their numbers: the same narrowing
     there moved plants/drum_boiler.toml by 6e-8 and made the draining line of
     tests/plants/inlet_valve_close_reopen.toml (5 volumes) overshoot into reverse
     flow at the sink (-0.010 kg/s against main's -0.0045 kg/s, on a different path

@@ -40,17 +40,22 @@ class Pump(Component):
     """Centrifugal pump between ``inlet`` and ``outlet``, no storage.
 
     Symbols: m [kg/s] mass flow (inlet -> outlet positive), rho [kg/m3] the
-    density of the fluid entering (inlet node for m > 0, outlet node for m < 0,
-    smooth upwind), Q = m/rho [m3/s] volume flow, r = n/n_0 [-] the relative
-    speed (parameter ``speed`` or signal input ``n``), H [m] head, eta [-]
-    efficiency, g = 9.80665 m/s2.
+    density of the fluid in the pump (below), Q = m/rho [m3/s] volume flow, r = n/n_0
+    [-] the relative speed (parameter ``speed`` or signal input ``n``), H [m] head,
+    eta [-] efficiency, g = 9.80665 m/s2, w the smooth max(m, 0) of the upwinding
+    (``physics.upwind_weight``), sigma(m) [-] the reverse fraction: 0 for m >= 0,
+    1 for m <= -m_eps, a C2 step between (``physics.reverse_fraction``; m_eps =
+    1e-3 m_nominal).
 
       head      H = H0 r^2 + a r Q + b Q sqrt(Q^2 + Q_reg^2)                     [m]
                 (affinity laws: H(Q, r) = r^2 H_1(Q/r) for the nominal-speed curve
                 H_1(q) = H0 + a q + b q|q|; b < 0)
       pressure  p_out - p_in = rho g H                                            [Pa]
+      density   rho = (1 - sigma) rho(p_in, h_in) + sigma rho(p_out, h_out)      [kg/m3]
       enthalpy  h_2 = h_in + softplus(p_out - p_in, dp_reg) / (rho eta)           [J/kg]
-      power     P = w(m) (h_2 - h_in)     (shaft power; = m dp/(rho eta) for m > m_eps) [W]
+      reverse   h_1 = (1 - sigma) h_in + sigma h_out                             [J/kg]
+      power     P = w(m) (h_2 - h_in) + w(-m) (h_1 - h_out)                       [W]
+                (shaft power; = m dp/(rho eta) for m > m_eps, 0 for m < -m_eps)
       work      dW/dt = P      (W [J]: shaft work over the run, for energy balances)
       eta       eta = eta (constant), or eta_1(Q/r) from the table eta_Q, eta_values at
                 nominal speed (affinity: similar points have equal efficiency),
@@ -74,22 +79,57 @@ class Pump(Component):
     term b Q sqrt(Q^2 + Q_reg^2) (Q_reg = 1e-2 m_nominal/rho) keeps dH/dQ < 0 at
     Q = 0, so a pump against a closed valve or between two fixed pressures stays
     index 1. A stopped pump (r = 0) is the resistance p_out - p_in = rho g b Q|Q|
-    in both directions. Fluid leaving through the inlet (reverse flow) carries the
-    outlet node's enthalpy (no work is exchanged with reverse flow); fluid leaving
-    through the outlet carries h_2. The energy flows at the ports and P balance
-    exactly: E_out - E_in = P. When p_out < p_in (a stopped pump, or flow beyond
-    the curve's run-out) the smooth max (softplus, width dp_reg) makes the flow
-    isenthalpic instead of cooling it. Without a casing (below) the shaft power is
-    zero at zero flow.
+    in both directions. The pump holds suction fluid while it pumps or stands
+    (m >= 0) and discharge fluid in reverse flow (m <= -m_eps): the density of the
+    head is the suction's, so a dead-headed pump delivers its shut-off head
+    p_in + rho_in g H0 r^2 whatever lies behind its discharge, and what leaves
+    through the inlet, h_1, is the suction node's own enthalpy, so the
+    regularisation's zero-flow exchange (w(0) = 3/16 m_eps both ways) carries no
+    discharge water (heated by compression and losses) back into the suction; only
+    real reverse flow carries the discharge node's enthalpy there (isenthalpic: no
+    work is exchanged with reverse flow). Fluid leaving through the outlet carries
+    h_2. The energy flows at the ports and P balance exactly: E_out - E_in = P
+    (the term w(-m) (h_1 - h_out) is the exchange's share; at zero flow P =
+    w(0) (h_2 - h_out), 0 when the discharge holds the delivery state). Why: with
+    the plain upwind mean a deaerator suction at 150 degC and 5 bar (1.8 K
+    subcooled) took the mean of its own and the discharge's enthalpy as a tripped
+    feed pump's flow passed zero, reached saturation, and Newton failed; a pump
+    against a shut feed valve used the mean of the suction's and a two-phase
+    discharge's density and delivered 68 bar of its 131 bar shut-off head (issue
+    20). When p_out < p_in (a stopped pump, or flow beyond the curve's run-out) the
+    smooth max (softplus, width dp_reg) makes the flow isenthalpic instead of
+    cooling it.
+
+    NPSH (condensable media): the output NPSH_a [m] is the net positive suction
+    head available at the suction node (p_in, h_in), with the velocity head when
+    the suction nozzle's flow area ``A_suction`` is given (v = m/(rho_in A)):
+
+      NPSH_a = (p_in - p_v(T_in)) / (rho_in g) + v^2/(2 g)        liquid inlet  [m]
+             = v^2/(2 g) - (h_in - h'(p_in)) / g                  flashing inlet
+      NPSH_r = r^2 NPSH_r_1(Q/r)     (affinity law; NPSH_r_1 at nominal speed: the
+               number NPSH_r, or the curve NPSH_r_Q, NPSH_r_values, PCHIP, held at
+               its ends; without either NPSH_r = 0: the check is on flashing)
+
+    (p_v the vapour pressure at the suction temperature, IF97 for water; h' the
+    enthalpy of saturated liquid; both forms are 0 at saturation, so NPSH_a is
+    continuous and negative once the suction flashes.) The switch "cavitation",
+    NPSH_a - NPSH_r + (H0 + 10 m) sigma(m) (a pump in reverse flow draws nothing
+    from its suction), is located where it falls through zero: with cavitation =
+    "stop" (default) the run stops there with a message naming the pump, the time,
+    NPSH_a, NPSH_r and the suction state; with "warn" the message is a warning of
+    the run (printed by ``dnasim run``, in report.html and ``Results.warnings``)
+    and the run goes on. A pump that cavitates at the start stops the start
+    ("stop") or warns. The node pressure is the static pressure at the suction
+    flange: a suction vessel above the pump is a Pipe with dz < 0 before it.
 
     Shut-off heating (give ``M_casing``): the fluid in the pump is a mixed volume of
     constant mass M [kg] with its own enthalpy h_2 [J/kg], a differential variable,
-    which leaves at both ports (also on reverse flow); the shaft power, including the
+    which leaves at the outlet (and at the inlet in reverse flow); the shaft power, including the
     losses P_0 r^3 that remain at zero flow (disk friction, recirculation; affinity
     law P ~ r^3), heats it:
 
       power     P = w(m) softplus(p_out - p_in, dp_reg)/(rho eta) + P_0 r^3          [W]
-      energy    M dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_2) + P               [W]
+      energy    M dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_1) + P               [W]
                 (h_in, h_out the inlet and outlet nodes' h; w the smooth max(m, 0))
 
     With flow, h_2 relaxes in M/m seconds to h_in + P/m = h_in + dp/(rho eta) +
@@ -97,11 +137,13 @@ class Pump(Component):
     Against a closed valve (m = 0) dh_2/dt = P_0 r^3/M [J/(kg s)], so the water in the
     pump warms at dT/dt = P_0 r^3/(M c_p) [K/s] until the flow resumes and carries
     the heat off. The ports' energy flows, P and the stored energy M h_2 balance
-    exactly: E_in - E_out + P = M dh_2/dt. At zero flow the smooth upwind weight
-    w(0) = 3/16 m_eps [kg/s] (m_eps = 1e-3 m_nominal) still exchanges casing water
-    with both nodes, a loss of w(0) (2 h_2 - h_in - h_out) [W] (0.1 to 0.6 % of P_0
-    in tests/plants/pump_shutoff.toml), and adds w(0) dp/(rho eta) to P (2.6 W
-    there). M_casing is the water in the casing; the
+    exactly: E_in - E_out + P = M dh_2/dt. What leaves through the inlet is
+    h_1 = (1 - sigma) h_in + sigma h_2 (suction water unless in reverse flow, as
+    above), so the energy balance reads
+    M dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_1) + P. At zero flow the smooth
+    upwind weight w(0) = 3/16 m_eps [kg/s] still exchanges casing water with the
+    discharge node, a loss of w(0) (h_2 - h_out) [W], and adds w(0) dp/(rho eta)
+    to P (2.6 W in tests/plants/pump_shutoff.toml). M_casing is the water in the casing; the
     casing's metal can be lumped in as the water mass of equal heat capacity
     C_metal/c_p [kg].
     """
@@ -186,9 +228,7 @@ class Pump(Component):
             "volume flows [m3/s] of an NPSH-required curve (nominal speed)",
             kind="array",
         ),
-        Param(
-            "NPSH_r_values", "m", None, "NPSH required [m] at NPSH_r_Q", min=0.0, kind="array"
-        ),
+        Param("NPSH_r_values", "m", None, "NPSH required [m] at NPSH_r_Q", min=0.0, kind="array"),
         Param(
             "cavitation",
             "1",
@@ -528,8 +568,7 @@ class Pump(Component):
         _, T, T_sat, _ = self.suction_state(x)
         p = x["inlet.p"]
         what = (
-            "the suction flashes (NPSH_a < 0: the inlet enthalpy is above that of "
-            "saturated liquid)"
+            "the suction flashes (NPSH_a < 0: the inlet enthalpy is above that of saturated liquid)"
             if a < 0.0 or self._npsh_r is None
             else f"NPSH available {a:.4g} m < NPSH required {r:.4g} m"
         )
@@ -539,7 +578,7 @@ class Pump(Component):
             f"{a:.4g} m, NPSH_r = {r:.4g} m, suction {p / 1e5:.6g} bar, "
             f"{T - 273.15:.2f} °C{sat}, flow {x['m']:.4g} kg/s. Raise the suction head "
             "(a suction pipe with dz < 0 from the vessel above the pump), subcool the "
-            "suction, or give cavitation = \"warn\" to go on"
+            'suction, or give cavitation = "warn" to go on'
         )
 
     def switches(self):
@@ -555,13 +594,18 @@ class Pump(Component):
             x = last.get("x")
             return self.cavitation_message(t, x) if x is not None else None
 
+        def warn(t, x, xp):  # cavitation = "warn": the message at the located crossing
+            x.modes.setdefault("warnings", []).append(self.cavitation_message(t, x))
+
+        stop = self.params["cavitation"] == "stop"
         return [
             Switch(
                 "cavitation",
                 g,
                 direction=-1,
-                terminal=self.params["cavitation"] == "stop",
-                message=message,
+                action=None if stop else warn,
+                terminal=stop,
+                message=message if stop else None,
                 doc="NPSH_a - NPSH_r [m] (+ margin for reverse flow): falls through 0",
             )
         ]
@@ -575,10 +619,12 @@ class Pump(Component):
         """A pump that cavitates at the start: PlantError (cavitation = "stop"), or a
         warning in its modes (``modes["warning"]``, printed after the run)."""
         if self.npsh_checked and self.cavitation_margin(t0, x) < 0.0:
-            text = self.cavitation_message(t0, x).replace("cavitation at", "cavitates at the start,")
+            text = self.cavitation_message(t0, x).replace(
+                "cavitation at", "cavitates at the start,"
+            )
             if self.params["cavitation"] == "stop":
                 raise PlantError(text)
-            x.modes["warning"] = text
+            x.modes.setdefault("warnings", []).append(text)
         return False
 
     # --------------------------------------------------------------- physics
@@ -587,8 +633,9 @@ class Pump(Component):
         return x["n"] if self.speed_from_signal else self.param_at("speed", t)
 
     def density(self, x):
-        """Density of the fluid entering the pump [kg/m3] (smooth upwind by m); with
-        the casing, of the fluid in the pump, rho(p_in, h_2). Why not upwind there:
+        """Density of the fluid in the pump [kg/m3]: the suction's for m >= 0, the
+        discharge node's for m <= -m_eps, blended by sigma(m) between (class doc);
+        with the casing, rho(p_in, h_2). Why not blended there:
         against a closed valve the casing water is hotter than the suction, and a
         density blended across the flow band |m| < m_eps makes p_out - p_in =
         rho g H rise with m near m = 0 (14 K: +2.7e5 Pa per kg/s against the curve's
