@@ -564,22 +564,25 @@ class Pump(Component):
         return self.npsh_available(x) - self.npsh_required(t, x) + lift
 
     def cavitation_message(self, t, x) -> str:
+        """The plain text of a cavitating pump at t, from the values in x."""
         a, r = self.npsh_available(x), self.npsh_required(t, x)
         _, T, T_sat, _ = self.suction_state(x)
         p = x["inlet.p"]
-        what = (
-            "the suction flashes (NPSH_a < 0: the inlet enthalpy is above that of saturated liquid)"
-            if a < 0.0 or self._npsh_r is None
-            else f"NPSH available {a:.4g} m < NPSH required {r:.4g} m"
+        if a <= 0.0:
+            what = "the suction flashes (NPSH_a <= 0: the inlet is at or above saturation)"
+        else:
+            what = "the NPSH available fell below the NPSH required"
+        sat = f" (saturation {T_sat - 273.15:.2f} °C)" if math.isfinite(T_sat) else ""
+        given = "" if self._npsh_r is not None else " (none given)"
+        text = (
+            f"pump '{self.name}' (Pump): cavitation at t = {t:.6g} s: {what}: NPSH_a = "
+            f"{a:.4f} m, NPSH_r = {r:.4f} m{given} at {x['m']:.4g} kg/s; suction {p / 1e5:.6g} "
+            f"bar, {T - 273.15:.2f} °C{sat}. Raise the suction head (a vessel above the "
+            "pump: a suction pipe with dz < 0) or the subcooling of the suction"
         )
-        sat = f", saturation {T_sat - 273.15:.2f} °C" if math.isfinite(T_sat) else ""
-        return (
-            f"pump '{self.name}' (Pump): cavitation at t = {t:.6g} s: {what}; NPSH_a = "
-            f"{a:.4g} m, NPSH_r = {r:.4g} m, suction {p / 1e5:.6g} bar, "
-            f"{T - 273.15:.2f} °C{sat}, flow {x['m']:.4g} kg/s. Raise the suction head "
-            "(a suction pipe with dz < 0 from the vessel above the pump), subcool the "
-            'suction, or give cavitation = "warn" to go on'
-        )
+        if self.params["cavitation"] == "stop":
+            text += ', or give cavitation = "warn" to go on'
+        return text
 
     def switches(self):
         if not self.npsh_checked:
@@ -595,7 +598,10 @@ class Pump(Component):
             return self.cavitation_message(t, x) if x is not None else None
 
         def warn(t, x, xp):  # cavitation = "warn": the message at the located crossing
-            x.modes.setdefault("warnings", []).append(self.cavitation_message(t, x))
+            text = self.cavitation_message(t, x)
+            warnings = x.modes.setdefault("warnings", [])
+            if text not in warnings:  # the action of one crossing may run twice
+                warnings.append(text)
 
         stop = self.params["cavitation"] == "stop"
         return [
@@ -617,14 +623,17 @@ class Pump(Component):
 
     def init_discrete_state(self, t0, x, xp):
         """A pump that cavitates at the start: PlantError (cavitation = "stop"), or a
-        warning in its modes (``modes["warning"]``, printed after the run)."""
+        warning in its modes (``modes["warnings"]``: ``System.warnings``)."""
         if self.npsh_checked and self.cavitation_margin(t0, x) < 0.0:
             text = self.cavitation_message(t0, x).replace(
                 "cavitation at", "cavitates at the start,"
             )
+            text = text.replace("fell below", "is below")
             if self.params["cavitation"] == "stop":
                 raise PlantError(text)
-            x.modes.setdefault("warnings", []).append(text)
+            warnings = x.modes.setdefault("warnings", [])
+            if text not in warnings:  # the start may try its modes several times
+                warnings.append(text)
         return False
 
     # --------------------------------------------------------------- physics

@@ -702,14 +702,6 @@ class NordsieckBDF:
                 # A predicted state outside the residual's domain (a square root of a
                 # slightly negative value, say): recoverable by a smaller step.
                 raise ResidualDomainError(str(exc)) from None
-            if self.matrix.structurally_regular and t != self.t:
-                # Singular at this point only, a predicted or iterated state the
-                # declared pattern does not explain (both valves around a node choked:
-                # an iterate of a feed line whose level controller shuts its feed
-                # valve, extrapolated 3 s into reverse flow of hot drum water,
-                # tests/field/feed_line_level_control.toml): a smaller step predicts
-                # another state.
-                raise ResidualDomainError(f"At t = {t:.10g}: {exc}") from None
             raise DAEError(f"At t = {t:.10g}: {exc}") from None
         self.jacobian_current = True
         self.newton_ss = 20.0

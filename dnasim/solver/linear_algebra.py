@@ -155,7 +155,6 @@ class IterationMatrix:
             pattern.sum_duplicates()
             pattern.sort_indices()
             self.pattern = pattern
-            self._declared = sparsity  # for ``structurally_regular``
             self.band = BandOrdering.of(pattern)
             if self.band is None or not self.band.worthwhile:
                 # the ordering from the entries that can be non-zero: the added
@@ -285,24 +284,6 @@ class IterationMatrix:
         return len(self.groups) if self.sparse else self.n
 
     # -- factorising and solving -------------------------------------------------------------
-    @property
-    def structurally_regular(self) -> bool:
-        """True when the declared sparsity pattern (without the kept diagonal) has a
-        perfect matching, so that a singular matrix is singular at its point only
-        (e.g. two choked valves in series fix no pressure between them), not
-        everywhere; False for a dense matrix (no pattern declared)."""
-        cached = self.__dict__.get("_regular")
-        if cached is None:
-            declared = getattr(self, "_declared", None)
-            if declared is None:
-                cached = False
-            else:
-                pat = scipy.sparse.csr_matrix(scipy.sparse.csc_matrix(declared) != 0)
-                match = maximum_bipartite_matching(pat, perm_type="column")
-                cached = bool(np.all(match >= 0))
-            self._regular = cached
-        return cached
-
     def factorize(self) -> None:
         """LU-factorise the current matrix; raise SingularMatrixError if singular."""
         self.nonfinite = not np.all(np.isfinite(self.matrix.data if self.sparse else self.matrix))
