@@ -829,21 +829,26 @@ def check_feedpump_trip(run: Run) -> Checks:
     fwd0 = df["pump.m"].to_numpy() >= 0
     dev = np.max(np.abs(df["n_suction.h"].to_numpy()[fwd0] / h_da - 1))
     # while the pump pumps or stands (m >= 0) the suction node mixes only the
-    # deaerator's supply: the pump returns no discharge water at zero flow (dnasim's
-    # IF97 against CoolProp's: round-off, 1e-9). Once the shut check valve leaks back
+    # deaerator's supply: the pump returns no discharge water at zero flow (to the
+    # solver's tolerance on an algebraic h, rtol 1e-6; measured 1e-15; 1e-2 on main).
+    # Once the shut check valve leaks back
     # through the stopped pump (m < 0) that leakage, 2e-3 kg/s, brings discharge water
     # into the node (measured 3e-6 of h)
     c.add(
-        "suction node = deaerator state h(5 bar, 150 degC) while m >= 0 (rel 1e-9)",
-        dev < 1e-9,
+        "suction node = deaerator state h(5 bar, 150 degC) while m >= 0 (rel 1e-6)",
+        dev < 1e-6,
         f"max rel dev {dev:.2e}",
     )
     ok, detail = _liquid(run, "n_suction", range(len(df)))
     c.add("the suction stays liquid (never flashes)", ok, detail)
-    npsh = npsh_hand(5e5, 150 + 273.15)
-    err = np.max(np.abs(df["pump.NPSH_a"].to_numpy()[fwd0] - npsh))
-    # (5 bar - p_sat(150 degC))/(rho g) = 2.6575 m; IF97 both sides: 1e-6 m
-    c.add(f"NPSH_a = hand calculation {npsh:.5f} m (1e-6 m)", err < 1e-6, f"max err {err:.2e} m")
+    npsh = npsh_hand(5e5, 150 + 273.15)  # (5 bar - p_sat(150 degC))/(rho g) = 2.6575 m
+    err = max(
+        abs(df["pump.NPSH_a"].iloc[i] - npsh_hand(p, T_ph_liquid(p, h)))
+        for i, (p, h) in enumerate(zip(df["n_suction.p"], df["n_suction.h"], strict=True))
+        if fwd0[i]
+    )
+    # at the model's suction state (p, h), forward IF97 both sides: round-off, 1e-6 m
+    c.add(f"NPSH_a = hand calculation, {npsh:.5f} m (1e-6 m)", err < 1e-6, f"max err {err:.2e} m")
     _check_feed_line_row(run, c, int(np.searchsorted(df["time"], 10.0) - 1), "before the trip")
     # the run-down on the curve: H = H0 r^2 + b Q sqrt(Q^2 + Q_reg^2) at every row with
     # forward flow (suction density, CoolProp); the model at rtol 1e-6 of ~1000 m

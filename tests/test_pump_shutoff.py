@@ -2,7 +2,7 @@
 valve is shut from 12 s to 72 s; the shaft power at zero flow P_0 heats the water
 in the pump casing (mass M), and the run goes on when the valve reopens.
 
-Closed forms (Pump docstring), with rho = rho(p_in, h_2) from CoolProp's IF97:
+Closed forms (Pump docstring), with rho = rho(p_out, h_2) from CoolProp's IF97:
 
     running    P = m (p_out - p_in)/(rho eta) + P_0,   h_2 = h_in + P/m       (steady)
     shut       dh_2/dt = P_0/M  [J/(kg s)],   dT_2/dt = P_0/(M c_p(p, T_2))  [K/s]
@@ -48,7 +48,7 @@ def _rho_ph(p, h):
 
 def _shaft_power(d, i):
     p_in, p_out, h_2 = d["n_suction.p"][i], d["n_discharge.p"][i], d["pump.h_2"][i]
-    rho = _rho_ph(p_in, h_2)
+    rho = _rho_ph(p_out, h_2)
     return d["pump.m"][i] * (p_out - p_in) / (rho * ETA) + P0
 
 

@@ -123,7 +123,8 @@ class Pump(Component):
     flange: a suction vessel above the pump is a Pipe with dz < 0 before it.
 
     Shut-off heating (give ``M_casing``): the fluid in the pump is a mixed volume of
-    constant mass M [kg] with its own enthalpy h_2 [J/kg], a differential variable,
+    constant mass M [kg] with its own enthalpy h_2 [J/kg] (and density rho(p_out, h_2)
+    in the head), a differential variable,
     which leaves at the outlet (and at the inlet in reverse flow); the shaft power, including the
     losses P_0 r^3 that remain at zero flow (disk friction, recirculation; affinity
     law P ~ r^3), heats it:
@@ -644,14 +645,18 @@ class Pump(Component):
     def density(self, x):
         """Density of the fluid in the pump [kg/m3]: the suction's for m >= 0, the
         discharge node's for m <= -m_eps, blended by sigma(m) between (class doc);
-        with the casing, rho(p_in, h_2). Why not blended there:
-        against a closed valve the casing water is hotter than the suction, and a
-        density blended across the flow band |m| < m_eps makes p_out - p_in =
-        rho g H rise with m near m = 0 (14 K: +2.7e5 Pa per kg/s against the curve's
-        -200), so the reopening valve found no unique flow (Newton diverged)."""
+        with the casing, rho(p_out, h_2), the casing water's at the delivery pressure
+        (as T_2). Why not blended there: against a closed valve the casing water is
+        hotter than the suction, and a density blended across the flow band |m| <
+        m_eps makes p_out - p_in = rho g H rise with m near m = 0 (14 K: +2.7e5 Pa
+        per kg/s against the curve's -200), so the reopening valve found no unique
+        flow (Newton diverged). Why at p_out: h_2 holds the enthalpy rise of
+        compression and losses, and a 150 degC deaerator suction, 1.8 K subcooled,
+        is below that rise from saturation: at p_in the casing water was two-phase,
+        the head fell to 1/3 and the pump never opened its check valve."""
         medium = self.medium
         if self.casing:
-            return float(medium.state(x["inlet.p"], x["h_2"]).rho)
+            return float(medium.state(x["outlet.p"], x["h_2"]).rho)
         rho_in = float(medium.state(x["inlet.p"], x["inlet.h"]).rho)
         s = reverse_fraction(x["m"], self.m_eps)
         if s == 0.0:
