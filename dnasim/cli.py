@@ -468,6 +468,8 @@ def _run(
         else:
             if not quiet:
                 click.echo(f"wrote {f}")
+    for w in outcome.warnings:  # the components' warnings (a cavitating pump), even with -q
+        click.echo(f"dnasim: warning: {w}", err=True)
     if not quiet or not outcome.success:
         click.echo(outcome.summary())
     if outcome.status == "output-error":

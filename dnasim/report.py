@@ -215,6 +215,15 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
         f"<span class='{status_cls}'>{html.escape(outcome.status)}</span>"
         + (f" ({html.escape(outcome.message)})" if outcome.message else "")
         + "</p>",
+    ]
+    warnings = list(getattr(outcome, "warnings", []) or [])
+    if warnings:  # the components' warnings of the run (a cavitating pump)
+        parts.append(
+            "<p class='bad'>Warnings:</p><ul>"
+            + "".join(f"<li>{html.escape(w)}</li>" for w in warnings)
+            + "</ul>"
+        )
+    parts += [
         "<h2>Run and solver statistics</h2><div class='grid'>",
     ]
     sim = getattr(loaded, "simulation", None)

@@ -50,6 +50,8 @@ class Results(Mapping):
     success, message : how the integration ended
     solver : the name of the backend ("NordsieckBDF", "IDA")
     sol : dense output y(t) when the solver kept it, else None
+    warnings : the components' warnings of the run, in plain words (a pump that
+        cavitates with ``cavitation = "warn"``; ``System.warnings``)
     """
 
     def __init__(
@@ -70,6 +72,7 @@ class Results(Mapping):
         message="",
         solver="",
         sol=None,
+        warnings=(),
     ):
         self.t = np.asarray(t, dtype=float)
         self.names = list(names)
@@ -89,6 +92,7 @@ class Results(Mapping):
         self.message = str(message)
         self.solver = solver
         self.sol = sol
+        self.warnings = list(warnings)
 
     # ---------------------------------------------------------------- Mapping
     def _rows(self) -> dict:

@@ -53,6 +53,7 @@ class RunOutcome:
     result: Any = None
     event_log: list = field(default_factory=list)
     step_history: Any = None
+    warnings: list = field(default_factory=list)  # System.warnings(): the run's warnings
 
     def failure_message(self) -> str:
         where = (
@@ -387,6 +388,7 @@ def run_plant(
         result=result,
         event_log=event_log,
         step_history=step_history,
+        warnings=system.warnings(),
     )
 
 

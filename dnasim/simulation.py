@@ -224,4 +224,5 @@ def results_from(system, raw, solver_name="", wall_time=None, init_time=None) ->
         message=message,
         solver=solver_name,
         sol=getattr(raw, "sol", None),
+        warnings=system.warnings(),
     )

@@ -33,7 +33,10 @@ Global equations F:
     h_out_k the enthalpy component k delivers when fluid leaves it through that
     port (``FluidPort.h_out``), and w_k(m) = (m + sqrt(m^2 + eps_k^2))/2 the smooth
     upwind weight with the port's flow scale eps_k = ``FluidPort.m_eps``
-    (``physics.upwind_weight``: w(m) - w(-m) = m, w(0) = eps/2 > 0). Probes carry
+    (``physics.upwind_weight``: w(m) - w(-m) = m, w(0) = eps/2 > 0); a port may
+    narrow the band of w to ``FluidPort.band`` (a number, or the name of one of the
+    component's variables: a control valve's band follows its opening,
+    ``physics.opening_band``), the tail keeping the scale eps_k. Probes carry
     no flow and take no part. So h_node is the flow-weighted mean of the
     enthalpies flowing in; at zero flow it is the eps-weighted mean, and the
     Jacobian stays regular.
@@ -316,7 +319,8 @@ class System:
         self.node_eq_start = len(eq_names)
         node_names = plant.node_names()
         n_nodes = len(node_names)
-        entries = []  # (node number, flow index, sign, h_out index, eps)
+        entries = []  # (node number, flow index, sign, h_out index, eps, band)
+        eps_vars = []  # (entry number, index of the variable that holds the band)
         for j, node in enumerate(node_names):
             eq_names.append(f"{node}.mass")
             eq_owner.append(node)
@@ -335,7 +339,13 @@ class System:
                         "port values"
                     ) from None
                 sign = 1.0 if port.role == "outlet" else -1.0
-                entries.append((j, g, sign, gh, float(port.m_eps)))
+                band = port.band
+                if isinstance(band, str):  # a variable of the component (a valve's band)
+                    eps_vars.append((len(entries), b.gidx[b.index[band]]))
+                    band = np.nan
+                elif band is None:
+                    band = port.m_eps
+                entries.append((j, g, sign, gh, float(port.m_eps), float(band)))
                 cols.append(g)
             rows_y.append(cols)
             rows_yp.append([])
@@ -344,18 +354,25 @@ class System:
             eq_owner.append(node)
             k = self.node_index[node]
             cols = [k + 1]
-            for jj, g, _, gh, _ in entries:
+            for jj, g, _, gh, _, _ in entries:
                 if jj == j:
                     cols += [g, gh]
+            cols += [ge for e, ge in eps_vars if entries[e][0] == j]
             rows_y.append(cols)
             rows_yp.append([])
         n = len(names)
-        e = np.array(entries, dtype=float).reshape(-1, 5)
+        e = np.array(entries, dtype=float).reshape(-1, 6)
         self._mix_node = e[:, 0].astype(np.intp)
         self._mix_flow = e[:, 1].astype(np.intp)
         self._mix_sign = e[:, 2]
         self._mix_hout = e[:, 3].astype(np.intp)
         self._mix_eps = e[:, 4]
+        ev = np.array(eps_vars, dtype=np.intp).reshape(-1, 2)
+        self._mix_eps_at, self._mix_eps_var = ev[:, 0], ev[:, 1]
+        #: the ports' bands (``FluidPort.band``; nan where a variable holds it), or
+        #: None when every band is its port's m_eps
+        narrower = ~np.isnan(e[:, 5]) & (e[:, 5] != e[:, 4])
+        self._mix_band = e[:, 5] if (narrower.any() or len(eps_vars)) else None
         self._node_h = np.array([self.node_index[nd] + 1 for nd in node_names], dtype=np.intp)
         self._mix_hnode = self._node_h[self._mix_node]
         self.n_nodes = n_nodes
@@ -414,6 +431,12 @@ class System:
             self.modes[b.comp.name].clear()
             b.comp.reset_discrete_state(self.modes[b.comp.name])
 
+    def warnings(self) -> list[str]:
+        """The components' warnings of the last start and run, in plain words: the
+        texts they put in their modes under "warnings" (a pump with cavitation =
+        "warn" when NPSH_a falls below NPSH_r, ``dnasim.components.pump``)."""
+        return [w for b in self.blocks for w in self.modes[b.comp.name].get("warnings", ())]
+
     def block(self, comp_name) -> ComponentBlock:
         for b in self.blocks:
             if b.comp.name == comp_name:
@@ -463,7 +486,9 @@ class System:
         blocks = cache.get(which)
         if blocks is None:
             blocks = cache[which] = evaluation_units([self.blocks[k] for k in which])
-        node_cols = np.concatenate((self._mix_flow, self._mix_hout, self._node_h))
+        node_cols = np.concatenate(
+            (self._mix_flow, self._mix_hout, self._node_h, self._mix_eps_var)
+        )
         nodes = bool(touched[node_cols].any())
 
         def F_cols(t, y, yp, f0):
@@ -530,7 +555,14 @@ class System:
         ``inflow``: the port flows into the nodes, sign * y[flow], when known."""
         if inflow is None:
             inflow = self._mix_sign * y[self._mix_flow]
-        w = upwind_weight(inflow, self._mix_eps)
+        if self._mix_band is None:
+            w = upwind_weight(inflow, self._mix_eps)
+        else:  # narrower bands (valves: by their opening), some held by variables
+            band = self._mix_band
+            if self._mix_eps_var.size:
+                band = band.copy()
+                band[self._mix_eps_at] = y[self._mix_eps_var]
+            w = upwind_weight(inflow, self._mix_eps, band)
         terms = w * (y[self._mix_hout] - y[self._mix_hnode])
         return np.bincount(self._mix_node, weights=terms, minlength=self.n_nodes)
 

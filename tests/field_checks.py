@@ -11,9 +11,11 @@ fresh process (``python -m dnasim.cli run PLANT -o DIR -q``), and judged from
   with M_st the fluid mass stored in all volumes (pipes, heat exchangers,
   attemperators: the columns ``<c>.M``, ``<c>.M[i]``, ``<c>.hot_M[i]``, ...),
   E_st their fluid internal energy plus the wall energy (C_wall/n) sum_i T_w[i]
-  of walls with heat capacity, M_passed [kg] and H_passed [J] the boundaries'
-  running integrals of m and m h (positive into the plant), Q_passed [J] the
-  heat given to fixed-temperature walls (fluid -> wall). The error is the
+  of walls with heat capacity (and a pump casing's M h_2, a drum's metal in its U),
+  M_passed [kg] and H_passed [J] the boundaries' running integrals of m and m h
+  (positive into the plant), Q_passed [J] the heat given to fixed-temperature walls
+  (fluid -> wall; a drum's -integral of its furnace heat), plus in H_passed the
+  pumps' shaft work W [J] (minus a turbine's). The error is the
   largest deviation over all rows, relative to a scale (see :func:`balances`);
 - closed forms (exponential approach to a fixed wall temperature, valve law);
 - hand calculations with CoolProp's forward IF97 (``PropsSI(..., 'IF97::Water')``).
@@ -188,6 +190,10 @@ def stored(run: Run) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
         walls = cols(df, rf"{n}\.T_w(\[\d+\])?")
         if walls and not _fixed_wall(comp):
             energy += comp.params.get("C_wall", 0.0) / len(walls) * df[walls].to_numpy().sum(1)
+        if type(comp).__name__ == "Pump" and comp.casing:  # the casing water M h_2
+            energy += comp.params["M_casing"] * df[f"{name}.h_2"].to_numpy()
+        if type(comp).__name__ == "Drum":  # furnace heat, as heat leaving the fluid (< 0)
+            energy += df[f"{name}.Q_passed"].to_numpy()
         if _fixed_wall(comp) and comp.params.get("kA", 0.0) > 0:
             if f"{name}.Q_passed" in df.columns:
                 energy += df[f"{name}.Q_passed"].to_numpy()  # heat that left the fluid
@@ -203,6 +209,18 @@ class Balance:
     mass_scale: str  # which scale: "throughput" or "stored"
     energy_scale: str
     note: str = ""
+
+
+def shaft_work(run: Run) -> dict:
+    """Shaft work done on the fluid [J] per row, by machine: pumps' W (work in),
+    turbines' -W (W is the work they deliver)."""
+    out = {}
+    for name, comp in run.plant.components.items():
+        kind = type(comp).__name__
+        if kind in ("Pump", "SteamTurbine") and f"{name}.W" in run.df.columns:
+            sign = 1.0 if kind == "Pump" else -1.0
+            out[name] = sign * run.df[f"{name}.W"].to_numpy()
+    return out
 
 
 def balances(run: Run) -> Balance:
@@ -226,6 +244,9 @@ def balances(run: Run) -> Balance:
         e_thr += np.max(np.abs(df[f"{b}.H_passed"].to_numpy()))
     for q in cols(df, r".*\.Q_passed"):
         e_thr += np.max(np.abs(df[q].to_numpy()))
+    for work in shaft_work(run).values():  # pumps' work into the fluid
+        h_pass += work
+        e_thr += np.max(np.abs(work))
     m_stored = np.max(np.abs(m_st))
     u_stored = np.max(np.abs(u_st))
     m_scale = max(m_thr, m_stored)
@@ -670,6 +691,339 @@ def check_closed_form(run: Run, medium: str, T_in: float) -> Checks:
     return c
 
 
+# ----------------------------------------------------------------------------- pumps (issue 20)
+
+
+def T_ph_liquid(p: float, h: float) -> float:
+    """IF97 temperature [K] of liquid water at (p, h) from the forward h(p, T) by brentq.
+    (CoolProp's T(p, h) is IF97's backward equation, consistent with the forward one
+    to +-25 mK only: 22 mK measured at 6.8 bar, 150 degC, 0.03 m of NPSH.)"""
+    T_top = T_sat(p) - 1e-6 if p < 22.064e6 else 640.0
+    return brentq(lambda T: h_pT(p, T) - h, 273.16, T_top, xtol=1e-12)
+
+
+def rho_ph(p: float, h: float) -> float:
+    """IF97 density [kg/m3] of liquid water at (p, h): the forward rho(p, T) at
+    ``T_ph_liquid`` (CoolProp's rho(p, h) goes through the backward T(p, h))."""
+    return PropsSI("D", "P", p, "T", T_ph_liquid(p, h), WATER)
+
+
+def npsh_hand(p: float, T: float, m: float = 0.0, area: float | None = None) -> float:
+    """NPSH available [m] of liquid water at (p, T): (p - p_sat(T))/(rho g) + v^2/(2 g),
+    v = m/(rho A) (CoolProp's IF97 forward rho(p, T) and saturation pressure)."""
+    rho = PropsSI("D", "P", p, "T", T, WATER)
+    p_v = PropsSI("P", "T", T, "Q", 0, WATER)
+    v = m / (rho * area) if area else 0.0
+    return (p - p_v) / (rho * G0) + v * v / (2 * G0)
+
+
+G0 = 9.80665  # standard gravity [m/s2]
+
+
+def pump_head(pump, Q: float, r: float, rho: float) -> float:
+    """The quadratic head curve H0 r^2 + a r Q + b Q sqrt(Q^2 + Q_reg^2) [m], Q_reg =
+    1e-2 m_nominal/rho (docs/components.md, Pump)."""
+    q_reg = 1e-2 * pump.params["m_nominal"] / rho
+    return pump.H0 * r * r + pump.a * r * Q + pump.b * Q * math.sqrt(Q * Q + q_reg * q_reg)
+
+
+def iec_liquid_flow(Kv: float, z_e: float, rho: float, dp: float, dp_reg: float = 10.0) -> float:
+    """IEC 60534 liquid flow [kg/s], unchoked: K z_e sqrt(rho) dp/(dp^2 + dp_reg^2)^(1/4),
+    K = Kv/36000 m2 (docs/components.md, ControlValve)."""
+    return Kv / 36000.0 * z_e * math.sqrt(rho) * dp / (dp * dp + dp_reg * dp_reg) ** 0.25
+
+
+def _dp_for_flow(Kv: float, z_e: float, rho: float, m: float) -> float:
+    """The pressure drop [Pa] at which the IEC liquid law passes m [kg/s] (m > 0)."""
+    guess = (m / (Kv / 36000.0 * z_e * math.sqrt(rho))) ** 2
+    return brentq(lambda d: iec_liquid_flow(Kv, z_e, rho, d) - m, 0.5 * guess, 2 * guess + 1.0)
+
+
+def feed_line_pressures(run: Run, row: int) -> dict:
+    """Hand calculation of the feed line deaerator -> pump -> check -> line -> feed
+    valve -> drum at the model's flows of one row: the pump's discharge pressure from
+    its curve (suction density from CoolProp), the check valve's and the feed valve's
+    IEC pressure drops and the line's friction, the densities from CoolProp at the
+    model's (p, h). Returns the predicted p [Pa] at the discharge and at the drum."""
+    df, P = run.df, run.plant.components
+    pump, check, line, valve = P["pump"], P["check"], P["line"], P["feed_valve"]
+    m = float(df["pump.m"].iloc[row])
+    m_out = float(df["feed_valve.m"].iloc[row])
+    r = pump.param_at("speed", float(df["time"].iloc[row]))
+    p_in, h_in = (float(df[f"n_suction.{q}"].iloc[row]) for q in ("p", "h"))
+    rho_in = rho_ph(p_in, h_in)
+    p_d = p_in + rho_in * G0 * pump_head(pump, m / rho_in, r, rho_in)
+    h_d = float(df["n_discharge.h"].iloc[row])
+    p_c = p_d - _dp_for_flow(check.params["Kv"], 1.0, rho_ph(p_d, h_d), m)  # fully open
+    m_reg = 1e-2 * line.params["m_nominal"]
+    p_l = p_c - line.params["k"] * m * math.sqrt(m * m + m_reg * m_reg) / rho_ph(p_c, h_d)
+    leak = valve.params["leakage"]
+    z_e = leak + (1 - leak) * valve.param_at("opening", float(df["time"].iloc[row]))
+    rho_l = rho_ph(p_l, float(df["n_line.h"].iloc[row]))
+    p_drum = p_l - _dp_for_flow(valve.params["Kv"], z_e, rho_l, m_out)
+    return {"discharge": p_d, "drum": p_drum}
+
+
+def _check_feed_line_row(run: Run, c: Checks, row: int, label: str) -> None:
+    hand = feed_line_pressures(run, row)
+    p_d = float(run.df["n_discharge.p"].iloc[row])
+    p_drum = float(run.df["n_drum.p"].iloc[row])
+    # the model's laws at rtol 1e-6 against CoolProp densities (forward IF97, ~1e-12);
+    # 1e-6 of the pressures
+    c.add(
+        f"{label}: discharge pressure = pump curve, CoolProp rho (rel 1e-6)",
+        abs(p_d / hand["discharge"] - 1) < 1e-6,
+        f"{p_d} vs {hand['discharge']}",
+    )
+    c.add(
+        f"{label}: pump curve - check - friction - feed valve = drum pressure (rel 1e-6)",
+        abs(hand["drum"] / p_drum - 1) < 1e-6,
+        f"{hand['drum']} vs {p_drum}",
+    )
+
+
+def _liquid(run: Run, node: str, rows) -> tuple[bool, str]:
+    """All rows' (p, h) of ``node`` below saturated liquid (CoolProp IF97)."""
+    df = run.df
+    margin = min(h_sat(df[f"{node}.p"].iloc[i], 0) - df[f"{node}.h"].iloc[i] for i in rows)
+    return margin > 0, f"min h' - h = {margin:.4g} J/kg"
+
+
+def _crossing(df: pd.DataFrame, column: str, t_from: float, sign: int) -> float:
+    """The first time [s] after t_from at which ``column`` changes sign (-1: falls
+    through 0, +1: rises through 0), linearly interpolated between rows."""
+    t = df["time"].to_numpy()
+    v = df[column].to_numpy()
+    for i in range(1, len(t)):
+        if t[i] > t_from and sign * v[i - 1] < 0 <= sign * v[i]:
+            return t[i - 1] + (t[i] - t[i - 1]) * v[i - 1] / (v[i - 1] - v[i])
+    return math.nan
+
+
+def _shut_off_row_checks(run, c, rows, r, label):
+    """Dead-headed pump: discharge pressure = p_in + rho_in g H0 r^2 (CoolProp rho at the
+    deaerator's state) and the discharge node at the pump's delivery state, liquid."""
+    df, pump = run.df, run.plant.components["pump"]
+    i0 = rows[0]  # the suction's state (it does not change while the pump dead-heads)
+    rho = rho_ph(float(df["n_suction.p"].iloc[i0]), float(df["n_suction.h"].iloc[i0]))
+    dp = (df["n_discharge.p"] - df["n_suction.p"]).to_numpy()[rows]
+    closed = rho * G0 * pump.H0 * r * r
+    err = np.max(np.abs(dp / closed - 1))
+    # H = H0 r^2 to b Q Q_reg ~ 1e-8 m at the leakage flow; rho from CoolProp's forward
+    # IF97 (1e-12); the model's pressures at rtol 1e-6: 1e-6
+    c.add(
+        f"{label}: p_out - p_in = rho_in g H0 r^2, r = {r:g} (rel 1e-6)",
+        err < 1e-6,
+        f"max rel err {err:.2e}, closed form {closed:.6g} Pa",
+    )
+    ok, detail = _liquid(run, "n_discharge", rows)
+    c.add(f"{label}: the dead-headed discharge node stays liquid", ok, detail)
+    return rho
+
+
+def check_feedpump_trip(run: Run) -> Checks:
+    df, c = run.df, Checks()
+    P = run.plant.components
+    pump = P["pump"]
+    h_da = h_pT(5e5, 150 + 273.15)
+    fwd0 = df["pump.m"].to_numpy() >= 0
+    dev = np.max(np.abs(df["n_suction.h"].to_numpy()[fwd0] / h_da - 1))
+    # while the pump pumps or stands (m >= 0) the suction node mixes only the
+    # deaerator's supply: the pump returns no discharge water at zero flow (to the
+    # solver's tolerance on an algebraic h, rtol 1e-6; measured 1e-15; 1e-2 on main).
+    # Once the shut check valve leaks back
+    # through the stopped pump (m < 0) that leakage, 2e-3 kg/s, brings discharge water
+    # into the node (measured 3e-6 of h)
+    c.add(
+        "suction node = deaerator state h(5 bar, 150 degC) while m >= 0 (rel 1e-6)",
+        dev < 1e-6,
+        f"max rel dev {dev:.2e}",
+    )
+    ok, detail = _liquid(run, "n_suction", range(len(df)))
+    c.add("the suction stays liquid (never flashes)", ok, detail)
+    npsh = npsh_hand(5e5, 150 + 273.15)  # (5 bar - p_sat(150 degC))/(rho g) = 2.6575 m
+    err = max(
+        abs(df["pump.NPSH_a"].iloc[i] - npsh_hand(p, T_ph_liquid(p, h)))
+        for i, (p, h) in enumerate(zip(df["n_suction.p"], df["n_suction.h"], strict=True))
+        if fwd0[i]
+    )
+    # at the model's suction state (p, h), forward IF97 both sides: round-off, 1e-6 m
+    c.add(f"NPSH_a = hand calculation, {npsh:.5f} m (1e-6 m)", err < 1e-6, f"max err {err:.2e} m")
+    _check_feed_line_row(run, c, int(np.searchsorted(df["time"], 10.0) - 1), "before the trip")
+    # the run-down on the curve: H = H0 r^2 + b Q sqrt(Q^2 + Q_reg^2) at every row with
+    # forward flow (suction density, CoolProp); the model at rtol 1e-6 of ~1000 m
+    rho_in = PropsSI("D", "P", 5e5, "T", 150 + 273.15, WATER)
+    fwd = df["pump.m"].to_numpy() > 0
+    H_hand = np.array(
+        [
+            pump_head(pump, m / rho_in, pump.param_at("speed", t), rho_in)
+            for t, m in zip(df["time"][fwd], df["pump.m"][fwd], strict=True)
+        ]
+    )
+    err = np.max(np.abs(df["pump.H"].to_numpy()[fwd] - H_hand))
+    c.add("run-down: H on the pump curve at r(t) (1e-3 m)", err < 1e-3, f"max err {err:.2e} m")
+    # the flow passes zero where the shut-off head meets the drum: r_c^2 = (p_drum -
+    # p_DA)/(rho g H0), t_c = 10 s + 10 s (1 - r_c). The check valve closes within
+    # dp_open = 1e3 Pa (d(r^2 rho g H0)/dt = 2.2e6 Pa/s: 0.5 ms) and the line still
+    # drains into the drum through the feed valve (dp ~ 1e2 Pa): 2 ms
+    r_c = math.sqrt((100e5 - 5e5) / (rho_in * G0 * pump.H0))
+    t_c = 10.0 + 10.0 * (1.0 - r_c)
+    t0 = _crossing(df, "pump.m", 10.0, -1)
+    c.add(
+        f"flow passes zero at t_c = {t_c:.4f} s (closed form, 2 ms)",
+        abs(t0 - t_c) < 2e-3,
+        f"t = {t0:.5f} s",
+    )
+    after = df["time"].to_numpy() > t_c + 0.01
+    leak = P["check"].params["leakage"] * P["check"].params["Kv"] / 36000.0
+    m_leak = leak * math.sqrt(rho_in * (100e5 - 5e5))  # the shut check valve's leakage bound
+    mv = np.max(np.abs(df["check.m"].to_numpy()[after]))
+    c.add(
+        f"check valve shut after t_c: |m| <= leakage {m_leak:.3g} kg/s",
+        mv <= m_leak,
+        f"max |m| = {mv:.3g} kg/s",
+    )
+    ok, detail = _liquid(run, "n_discharge", range(len(df)))
+    c.add("the discharge node stays liquid through the trip", ok, detail)
+    # the stopped pump (t >= 20 s) is a resistance: p_out - p_in = rho g b Q|Q| with the
+    # check valve's leakage flowing back: a few Pa
+    stopped = df["time"].to_numpy() >= 20.0
+    dp = np.max(np.abs((df["n_discharge.p"] - df["n_suction.p"]).to_numpy()[stopped]))
+    c.add("stopped pump: no head (|dp| < 10 Pa)", dp < 10.0, f"max |dp| = {dp:.3g} Pa")
+    return c
+
+
+def check_feedpump_restart(run: Run) -> Checks:
+    df, c = run.df, Checks()
+    P = run.plant.components
+    t = df["time"].to_numpy()
+    rows = np.flatnonzero((t >= 10.0) & (t <= 30.0))
+    rho = _shut_off_row_checks(run, c, rows, 0.8, "dead-headed at r = 0.8")
+    # the shut check valve leaks the line's water back into the stagnant discharge node
+    # (the line at 100 bar, the pump's shut-off head 85.6 bar): the node holds a mixture
+    # of the pump's delivery state h_in + dp/(rho eta) and the line's water, both
+    # liquid (maximum principle, 1e-6 of h for the solver)
+    h_in = h_pT(5e5, 150 + 273.15)
+    eta = P["pump"].params["eta"]
+    inside = []
+    for i in rows:
+        h_deliv = h_in + (df["n_discharge.p"].iloc[i] - df["n_suction.p"].iloc[i]) / (rho * eta)
+        lo, hi = sorted((h_deliv, float(df["n_check.h"].iloc[i])))
+        h_d = float(df["n_discharge.h"].iloc[i])
+        inside.append(lo * (1 - 1e-6) <= h_d <= hi * (1 + 1e-6))
+    c.add(
+        "dead-headed discharge between the delivery state and the line's water",
+        all(inside),
+        f"{sum(inside)} of {len(inside)} rows",
+    )
+    # the check valve opens where r^2 rho g H0 reaches the drum: r_o^2 = 95 bar/(rho g
+    # H0), t_o = 30 s + 5 s (r_o - 0.8)/0.2 (2 ms as in the trip)
+    r_o = math.sqrt((100e5 - 5e5) / (rho * G0 * P["pump"].H0))
+    t_o = 30.0 + 5.0 * (r_o - 0.8) / 0.2
+    t1 = _crossing(df, "pump.m", 30.0, +1)
+    c.add(
+        f"feed resumes at t_o = {t_o:.4f} s (closed form, 2 ms)",
+        abs(t1 - t_o) < 2e-3,
+        f"t = {t1:.5f} s",
+    )
+    _check_feed_line_row(run, c, len(df) - 1, "feeding at the end")
+    return c
+
+
+def check_feedpump_closed_valve(run: Run) -> Checks:
+    df, c = run.df, Checks()
+    t = df["time"].to_numpy()
+    rows = np.flatnonzero((t >= 13.0) & (t <= 60.0))
+    rho = _shut_off_row_checks(run, c, rows, 1.0, "against the shut feed valve")
+    h_in = h_pT(5e5, 120 + 273.15)
+    eta = run.plant.components["pump"].params["eta"]
+    dev = []
+    for i in rows:
+        h_deliv = h_in + (df["n_discharge.p"].iloc[i] - df["n_suction.p"].iloc[i]) / (rho * eta)
+        # the shut valve's zero-flow exchange is 2.3e-3 of the pump's (physics.opening_band)
+        bound = 2.3e-3 * abs(df["n_feed.h"].iloc[i] - h_deliv) + 1e-6 * h_deliv
+        dev.append(abs(df["n_discharge.h"].iloc[i] - h_deliv) / bound)
+    c.add(
+        "discharge node at the pump's delivery state, not the drum's (2.3e-3 of the gap)",
+        max(dev) <= 1.0,
+        f"max deviation {max(dev):.3f} of the bound",
+    )
+    m_shut = df["feed_valve.m"].to_numpy()[rows]
+    c.add(
+        "the shut valve leaks forward (shut-off head above the drum)",
+        np.all(m_shut > 0),
+        f"min {m_shut.min():.3g} kg/s",
+    )
+    c.add(
+        "feeds again at the end (> 10 kg/s)",
+        final(df, "pump.m") > 10.0,
+        f"{final(df, 'pump.m'):.4g} kg/s",
+    )
+    return c
+
+
+def check_feed_line_level(run: Run) -> Checks:
+    df, c = run.df, Checks()
+    P = run.plant.components
+    pump = P["pump"]
+    area = pump.params["A_suction"]
+    err = []
+    for i in range(len(df)):
+        p, m = df["n_suction.p"].iloc[i], df["pump.m"].iloc[i]
+        T = T_ph_liquid(p, df["n_suction.h"].iloc[i])
+        err.append(abs(df["pump.NPSH_a"].iloc[i] - npsh_hand(p, T, m, area)))
+    # forward IF97 both sides (round-off of p_sat and rho: 1e-9 m); 1e-6 m
+    c.add(
+        "NPSH_a = hand calculation with velocity head (1e-6 m)",
+        max(err) < 1e-6,
+        f"{max(err):.2e} m",
+    )
+    # the static head of the 20 m downcomer: p_suction = p_DA - k m|m|/rho + rho g 20 m
+    rho = PropsSI("D", "P", 5e5, "T", 150 + 273.15, WATER)
+    m = final(df, "downcomer.m[0]")
+    m_reg = 1e-2 * P["downcomer"].params["m_nominal"]
+    p_hand = 5e5 - P["downcomer"].params["k"] * m * math.sqrt(m * m + m_reg * m_reg) / rho
+    p_hand += rho * G0 * 20.0
+    c.add(
+        "suction pressure = deaerator + static head - friction (rel 1e-6)",
+        abs(final(df, "n_suction.p") / p_hand - 1) < 1e-6,
+        f"{final(df, 'n_suction.p')} vs {p_hand}",
+    )
+    from scipy.interpolate import PchipInterpolator
+
+    curve = PchipInterpolator(pump.params["NPSH_r_Q"], pump.params["NPSH_r_values"])
+    rho_in = np.array(
+        [rho_ph(p, h) for p, h in zip(df["n_suction.p"], df["n_suction.h"], strict=True)]
+    )
+    q = np.clip(df["pump.m"].to_numpy() / rho_in, 0.0, pump.params["NPSH_r_Q"][-1])
+    err = np.max(np.abs(df["pump.NPSH_r"].to_numpy() - curve(q)))
+    # Q = m/rho(p_in, h_in) with the forward-IF97 density (round-off); 1e-9 m
+    c.add("NPSH_r on its curve at r = 1 (1e-9 m)", err < 1e-9, f"max err {err:.2e} m")
+    margin = np.min(df["pump.NPSH_a"] - df["pump.NPSH_r"])
+    c.add("no cavitation: NPSH_a > NPSH_r all run", margin > 0, f"min margin {margin:.3g} m")
+    t = df["time"].to_numpy()
+    stop = np.flatnonzero((t > 20.0) & (t < 80.0) & (df["level_pi.z"].to_numpy() <= 0.0))
+    c.add("the level controller closes the feed valve (feed stops)", stop.size > 0, "")
+    if stop.size:
+        rows = stop[stop >= stop[0] + 3]  # the shut valve's first rows: the flow decays
+        rows = rows if rows.size else stop
+        _shut_off_row_checks(run, c, rows, 1.0, "feed valve shut")
+        ok, detail = _liquid(run, "n_check", rows)
+        c.add("the node between check valve and feed valve stays liquid", ok, detail)
+        # it holds the pump's water: the shut feed valve exchanges (3/16 1e-3 + 2.5e-4)
+        # m_eps at zero flow, the pump and the check valve 3/16 m_eps each, in series:
+        # 2 x 2.3e-3 of the gap to the drum's water (measured 4.64e-3); 5e-3
+        h2, hc, hf = (df[f"{n}"].to_numpy()[rows] for n in ("pump.h_2", "n_check.h", "n_feed.h"))
+        frac = np.max(np.abs(hc - h2) / np.abs(hf - h2))
+        c.add(
+            "... at the pump's delivery state, not the drum's (5e-3 of the gap)",
+            frac <= 5e-3,
+            f"{frac:.2e} of the gap",
+        )
+    c.add("feeds again at the end (> 10 kg/s)", final(df, "pump.m") > 10.0, "")
+    return c
+
+
 # ----------------------------------------------------------------------------- the suite
 
 
@@ -699,6 +1053,10 @@ CASES = [
     Case("reversal_air", check_reversal_air),
     Case("closed_form_air", lambda r: check_closed_form(r, "Air", 320 + 273.15)),
     Case("closed_form_water", lambda r: check_closed_form(r, "Water", 80 + 273.15)),
+    Case("feedpump_trip_deaerator", check_feedpump_trip),
+    Case("feedpump_restart_deadhead", check_feedpump_restart),
+    Case("feedpump_closed_valve", check_feedpump_closed_valve),
+    Case("feed_line_level_control", check_feed_line_level),
 ]
 CASE = {c.name: c for c in CASES}
 

@@ -232,6 +232,10 @@ class FluidPort:
     of "resistance" (e.g. "k" of a Pipe with k = 0), named in structure messages.
     m_eps: flow scale [kg/s] of the smooth upwind weight w(m) at this port
     (``physics.upwind_weight``); the node's mixing equation uses the same value.
+    band: None (the band of w is m_eps), or a narrower band [kg/s] for w's
+    regularised part, the tail keeping m_eps's scale (``physics.upwind_weight``): a
+    number, or the local name of a variable of the component that holds it (a
+    control valve's band narrows with its opening: ``physics.opening_band``).
     """
 
     name: str
@@ -243,21 +247,39 @@ class FluidPort:
     h_source: bool = True
     pressure_param: str | None = None
     m_eps: float = 1e-6
+    band: float | str | None = None
 
 
-def flow_through_ports(m_eps: float, outlet_h: str = "inlet.h") -> list[FluidPort]:
+def flow_through_ports(
+    m_eps: float, outlet_h: str = "inlet.h", band: float | str | None = None
+) -> list[FluidPort]:
     """The inlet and outlet of a component without storage whose one mass flow
     variable ``m`` [kg/s] passes both ports (valves, pumps, turbines). Fluid leaving
     through the inlet (reverse flow) carries the outlet node's h; fluid leaving
     through the outlet carries ``outlet_h``: the inlet node's h for a throttle
     (isenthalpic), the component's own outlet enthalpy (e.g. "h_2") for a machine.
-    ``m_eps`` [kg/s]: the flow scale of the upwind weight at both ports."""
+    ``m_eps`` [kg/s]: the flow scale of the upwind weight at both ports; ``band``:
+    a narrower band of it (``FluidPort.band``), the same at both ports."""
     return [
         FluidPort(
-            "inlet", "inlet", "m", "resistance", h_out="outlet.h", h_source=False, m_eps=m_eps
+            "inlet",
+            "inlet",
+            "m",
+            "resistance",
+            h_out="outlet.h",
+            h_source=False,
+            m_eps=m_eps,
+            band=band,
         ),
         FluidPort(
-            "outlet", "outlet", "m", "resistance", h_out=outlet_h, h_source=False, m_eps=m_eps
+            "outlet",
+            "outlet",
+            "m",
+            "resistance",
+            h_out=outlet_h,
+            h_source=False,
+            m_eps=m_eps,
+            band=band,
         ),
     ]
 

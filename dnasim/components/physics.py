@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 
+from dnasim.timefunctions import Constant
+
 G = 9.80665  # standard gravity [m/s2]
 
 
@@ -275,17 +277,62 @@ def valve_flow(C, z, dp, dp_reg):
 M_EPS_REL = 1e-3
 
 
+#: smallest relative band of a control valve (``opening_band``): a closed valve's band is
+#: 1e-3 of its full-open one, m_eps = 1e-6 m_nominal, the order of the flows' absolute
+#: tolerance (atol_scaled m_nominal), so that a leakage flow changing sign is resolved.
+Z_BAND_MIN = 1e-3
+
+
+def fixed_value(v) -> bool:
+    """True when a parameter's value does not change in time: a number or a
+    ``timefunctions.Constant`` (a time-function parameter given as a number)."""
+    return isinstance(v, (int, float, Constant))
+
+
+def opening_band(eps, z_e):
+    """A valve's upwind band [kg/s] at effective opening z_e [-]: eps sqrt(z_e^2 + Z_BAND_MIN^2)
+    (eps [kg/s]: the full-open band M_EPS_REL m_nominal).
+
+    The band is 1e-3 of the flow the valve can pass at its present opening, as it is
+    1e-3 of the nominal flow for the other components: a closed valve exchanges no
+    more than its (exactly upwinded) leakage between its two nodes, and at zero flow
+    w(0) = 3/16 band + 2.5e-4 eps (the tail, kept at the full-open scale,
+    ``upwind_weight``), 2.3e-3 of what a pump or pipe beside it exchanges. With a
+    fixed band the regularisation's exchange flow w(0) = 3/16 eps went through a
+    closed valve in both directions, and a stagnant node between a pump and its shut
+    feed valve took the mean of the pump's delivery enthalpy and the drum's (issue
+    20: two-phase at the pump's discharge). Band and tail are the same at both ports,
+    so the valve stays energy-neutral (w(m) - w(-m) = m for any band).
+
+    Used by ``ControlValve`` (a ``CheckValve`` keeps the full band: see its doc). The
+    seed's ``Valve`` keeps its fixed band, so that the plants written with it keep
+    their numbers: the same narrowing
+    there moved plants/drum_boiler.toml by 6e-8 and made the draining line of
+    tests/plants/inlet_valve_close_reopen.toml (5 volumes) overshoot into reverse
+    flow at the sink (-0.010 kg/s against main's -0.0045 kg/s, on a different path
+    of step sizes)."""
+    return eps * math.sqrt(z_e * z_e + Z_BAND_MIN * Z_BAND_MIN)
+
+
 #: flow scale of the positive tail of the upwind weight, relative to its band eps
 TAIL_REL = 1e-3
 
 
-def upwind_weight(m, eps):
+def upwind_weight(m, eps, band=None):
     """A C2 smooth max(m, 0) [kg/s], regularised in the band |m| < eps, with a
     tiny positive tail:
 
         w(m) = (m + q(m)) / 2 + d^2 / (4 sqrt(m^2 + d^2)),       d = 1e-3 eps
         q(m) = |m|                                 for |m| >= eps
         q(m) = eps (3/8 + 3/4 x^2 - 1/8 x^4)       for |m| < eps, x = m/eps
+
+    ``band`` [kg/s] (optional, a number or an array like m): a narrower band for q
+    (a valve's, which narrows with its opening: ``opening_band``), with the tail
+    kept at d = 1e-3 eps. The tail is what keeps the node's mixing equation regular
+    at a Newton iterate whose flows do not balance; scaled with a closed valve's
+    band it was 1e-6 of this, and the given start of a feed line whose check valve
+    was guessed shut (the only port at its outlet node with a flow towards the node)
+    had a singular iteration matrix (condition 5e18).
 
     q and the tail are even, so w(m) - w(-m) = m exactly (the identity behind the
     exact energy conservation at nodes). q joins |m| with its first and second
@@ -297,7 +344,7 @@ def upwind_weight(m, eps):
     iteration matrix is exactly singular, as measured on a draining pipe behind a
     closed valve). A C1 band was tried first: the integrator's error test failed
     repeatedly where a valve closing in 0.1 s drove flows through the band."""
-    if type(m) is float and type(eps) is float:
+    if band is None and type(m) is float and type(eps) is float:
         # the same operations in the same order on a Python float (bit-identical to
         # the array branch): a scalar port flow costs 1 us here instead of 10 in numpy
         x = m / eps
@@ -306,7 +353,7 @@ def upwind_weight(m, eps):
         d = TAIL_REL * eps
         return 0.5 * (m + q) + d * d / (4.0 * math.sqrt(m * m + d * d))
     m = np.asarray(m, dtype=float)
-    q = _q(m, eps)
+    q = _q(m, eps if band is None else band)
     d = TAIL_REL * eps
     return 0.5 * (m + q) + d * d / (4.0 * np.sqrt(m * m + d * d))
 
@@ -378,6 +425,23 @@ def upwind_mean(m, a, b, eps):
 def upwind_mean_weighted(wp, wm, a, b):
     """``upwind_mean`` from the weights wp = w(m), wm = w(-m) already computed."""
     return (wp * a + wm * b) / (wp + wm)
+
+
+def reverse_fraction(m: float, eps: float) -> float:
+    """sigma(m) [-]: the fraction of a machine's through-flow band that is reverse flow,
+    a C2 step from 0 (m >= 0) to 1 (m <= -eps):
+
+        sigma = S(x),  x = clip(-m/eps, 0, 1),  S(x) = x^3 (10 - 15 x + 6 x^2)
+
+    A pump carries the state of the fluid it contains by it: for m >= 0 the suction's
+    (forward flow, and the stagnant pump, hold suction fluid), for m <= -eps the
+    discharge's (reverse flow), blended in between (``dnasim.components.pump``)."""
+    x = -m / eps
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    return x * x * x * (10.0 + x * (6.0 * x - 15.0))
 
 
 def _neg(m):

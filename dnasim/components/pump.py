@@ -13,29 +13,49 @@ from dnasim.components.base import (
     Output,
     Param,
     SignalPort,
+    Switch,
     Variable,
     flow_through_ports,
     shaft_work_equations,
 )
-from dnasim.components.physics import M_REG_REL, G, softplus, upwind_mean, upwind_weight
+from dnasim.components.control_valve import vapour_pressure
+from dnasim.components.physics import (
+    M_REG_REL,
+    G,
+    is_condensable,
+    reverse_fraction,
+    saturation_enthalpies,
+    softplus,
+    upwind_weight,
+)
 from dnasim.errors import PlantError
+
+#: head [m] added to the cavitation switch function for reverse flow (m <= -m_eps,
+#: weighted by physics.reverse_fraction): a pump that does not draw from its suction
+#: does not cavitate; the margin is the shut-off head plus this
+NPSH_REVERSE_MARGIN = 10.0
 
 
 class Pump(Component):
     """Centrifugal pump between ``inlet`` and ``outlet``, no storage.
 
     Symbols: m [kg/s] mass flow (inlet -> outlet positive), rho [kg/m3] the
-    density of the fluid entering (inlet node for m > 0, outlet node for m < 0,
-    smooth upwind), Q = m/rho [m3/s] volume flow, r = n/n_0 [-] the relative
-    speed (parameter ``speed`` or signal input ``n``), H [m] head, eta [-]
-    efficiency, g = 9.80665 m/s2.
+    density of the fluid in the pump (below), Q = m/rho [m3/s] volume flow, r = n/n_0
+    [-] the relative speed (parameter ``speed`` or signal input ``n``), H [m] head,
+    eta [-] efficiency, g = 9.80665 m/s2, w the smooth max(m, 0) of the upwinding
+    (``physics.upwind_weight``), sigma(m) [-] the reverse fraction: 0 for m >= 0,
+    1 for m <= -m_eps, a C2 step between (``physics.reverse_fraction``; m_eps =
+    1e-3 m_nominal).
 
       head      H = H0 r^2 + a r Q + b Q sqrt(Q^2 + Q_reg^2)                     [m]
                 (affinity laws: H(Q, r) = r^2 H_1(Q/r) for the nominal-speed curve
                 H_1(q) = H0 + a q + b q|q|; b < 0)
       pressure  p_out - p_in = rho g H                                            [Pa]
+      density   rho = (1 - sigma) rho(p_in, h_in) + sigma rho(p_out, h_out)      [kg/m3]
       enthalpy  h_2 = h_in + softplus(p_out - p_in, dp_reg) / (rho eta)           [J/kg]
-      power     P = w(m) (h_2 - h_in)     (shaft power; = m dp/(rho eta) for m > m_eps) [W]
+      reverse   h_1 = (1 - sigma) h_in + sigma h_out                             [J/kg]
+      power     P = w(m) (h_2 - h_in) + w(-m) (h_1 - h_out)                       [W]
+                (shaft power; = m dp/(rho eta) for m > m_eps, 0 for m < -m_eps)
       work      dW/dt = P      (W [J]: shaft work over the run, for energy balances)
       eta       eta = eta (constant), or eta_1(Q/r) from the table eta_Q, eta_values at
                 nominal speed (affinity: similar points have equal efficiency),
@@ -59,22 +79,58 @@ class Pump(Component):
     term b Q sqrt(Q^2 + Q_reg^2) (Q_reg = 1e-2 m_nominal/rho) keeps dH/dQ < 0 at
     Q = 0, so a pump against a closed valve or between two fixed pressures stays
     index 1. A stopped pump (r = 0) is the resistance p_out - p_in = rho g b Q|Q|
-    in both directions. Fluid leaving through the inlet (reverse flow) carries the
-    outlet node's enthalpy (no work is exchanged with reverse flow); fluid leaving
-    through the outlet carries h_2. The energy flows at the ports and P balance
-    exactly: E_out - E_in = P. When p_out < p_in (a stopped pump, or flow beyond
-    the curve's run-out) the smooth max (softplus, width dp_reg) makes the flow
-    isenthalpic instead of cooling it. Without a casing (below) the shaft power is
-    zero at zero flow.
+    in both directions. The pump holds suction fluid while it pumps or stands
+    (m >= 0) and discharge fluid in reverse flow (m <= -m_eps): the density of the
+    head is the suction's, so a dead-headed pump delivers its shut-off head
+    p_in + rho_in g H0 r^2 whatever lies behind its discharge, and what leaves
+    through the inlet, h_1, is the suction node's own enthalpy, so the
+    regularisation's zero-flow exchange (w(0) = 3/16 m_eps both ways) carries no
+    discharge water (heated by compression and losses) back into the suction; only
+    real reverse flow carries the discharge node's enthalpy there (isenthalpic: no
+    work is exchanged with reverse flow). Fluid leaving through the outlet carries
+    h_2. The energy flows at the ports and P balance exactly: E_out - E_in = P
+    (the term w(-m) (h_1 - h_out) is the exchange's share; at zero flow P =
+    w(0) (h_2 - h_out), 0 when the discharge holds the delivery state). Why: with
+    the plain upwind mean a deaerator suction at 150 degC and 5 bar (1.8 K
+    subcooled) took the mean of its own and the discharge's enthalpy as a tripped
+    feed pump's flow passed zero, reached saturation, and Newton failed; a pump
+    against a shut feed valve used the mean of the suction's and a two-phase
+    discharge's density and delivered 68 bar of its 131 bar shut-off head (issue
+    20). When p_out < p_in (a stopped pump, or flow beyond the curve's run-out) the
+    smooth max (softplus, width dp_reg) makes the flow isenthalpic instead of
+    cooling it.
+
+    NPSH (condensable media): the output NPSH_a [m] is the net positive suction
+    head available at the suction node (p_in, h_in), with the velocity head when
+    the suction nozzle's flow area ``A_suction`` is given (v = m/(rho_in A)):
+
+      NPSH_a = (p_in - p_v(T_in)) / (rho_in g) + v^2/(2 g)        liquid inlet  [m]
+             = v^2/(2 g) - (h_in - h'(p_in)) / g                  flashing inlet
+      NPSH_r = r^2 NPSH_r_1(Q/r)     (affinity law; NPSH_r_1 at nominal speed: the
+               number NPSH_r, or the curve NPSH_r_Q, NPSH_r_values, PCHIP, held at
+               its ends; without either NPSH_r = 0: the check is on flashing)
+
+    (p_v the vapour pressure at the suction temperature, IF97 for water; h' the
+    enthalpy of saturated liquid; both forms are 0 at saturation, so NPSH_a is
+    continuous and negative once the suction flashes.) The switch "cavitation",
+    NPSH_a - NPSH_r + (H0 + 10 m) sigma(m) (a pump in reverse flow draws nothing
+    from its suction), is located where it falls through zero: with cavitation =
+    "stop" (default) the run stops there with a message naming the pump, the time,
+    NPSH_a, NPSH_r and the suction state; with "warn" the message is a warning of
+    the run (printed by ``dnasim run``, in report.html and ``Results.warnings``)
+    and the run goes on. A pump that cavitates at the start stops the start
+    ("stop") or warns. The node pressure is the static pressure at the suction
+    flange: a suction vessel above the pump is a Pipe with dz < 0 before it.
 
     Shut-off heating (give ``M_casing``): the fluid in the pump is a mixed volume of
-    constant mass M [kg] with its own enthalpy h_2 [J/kg], a differential variable,
-    which leaves at both ports (also on reverse flow); the shaft power, including the
+    constant mass M [kg] with its own enthalpy h_2 [J/kg] (and density rho(p_out, h_2)
+    in the head), a differential variable,
+    which leaves at the outlet (and at the inlet in reverse flow); the shaft power, including the
     losses P_0 r^3 that remain at zero flow (disk friction, recirculation; affinity
     law P ~ r^3), heats it:
 
       power     P = w(m) softplus(p_out - p_in, dp_reg)/(rho eta) + P_0 r^3          [W]
-      energy    M dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_2) + P               [W]
+      energy    M dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_1) + P               [W]
                 (h_in, h_out the inlet and outlet nodes' h; w the smooth max(m, 0))
 
     With flow, h_2 relaxes in M/m seconds to h_in + P/m = h_in + dp/(rho eta) +
@@ -82,11 +138,13 @@ class Pump(Component):
     Against a closed valve (m = 0) dh_2/dt = P_0 r^3/M [J/(kg s)], so the water in the
     pump warms at dT/dt = P_0 r^3/(M c_p) [K/s] until the flow resumes and carries
     the heat off. The ports' energy flows, P and the stored energy M h_2 balance
-    exactly: E_in - E_out + P = M dh_2/dt. At zero flow the smooth upwind weight
-    w(0) = 3/16 m_eps [kg/s] (m_eps = 1e-3 m_nominal) still exchanges casing water
-    with both nodes, a loss of w(0) (2 h_2 - h_in - h_out) [W] (0.1 to 0.6 % of P_0
-    in tests/plants/pump_shutoff.toml), and adds w(0) dp/(rho eta) to P (2.6 W
-    there). M_casing is the water in the casing; the
+    exactly: E_in - E_out + P = M dh_2/dt. What leaves through the inlet is
+    h_1 = (1 - sigma) h_in + sigma h_2 (suction water unless in reverse flow, as
+    above), so the energy balance reads
+    M dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_1) + P. At zero flow the smooth
+    upwind weight w(0) = 3/16 m_eps [kg/s] still exchanges casing water with the
+    discharge node, a loss of w(0) (h_2 - h_out) [W], and adds w(0) dp/(rho eta)
+    to P (2.6 W in tests/plants/pump_shutoff.toml). M_casing is the water in the casing; the
     casing's metal can be lumped in as the water mass of equal heat capacity
     C_metal/c_p [kg].
     """
@@ -156,6 +214,30 @@ class Pump(Component):
             "shaft power at zero flow and nominal speed, P_0 (with M_casing)",
             min=0.0,
         ),
+        Param(
+            "A_suction",
+            "m2",
+            None,
+            "flow area of the suction nozzle: adds the velocity head to NPSH_a",
+            min=0.0,
+        ),
+        Param("NPSH_r", "m", None, "NPSH required at nominal speed (a number)", min=0.0),
+        Param(
+            "NPSH_r_Q",
+            "m3/s",
+            None,
+            "volume flows [m3/s] of an NPSH-required curve (nominal speed)",
+            kind="array",
+        ),
+        Param("NPSH_r_values", "m", None, "NPSH required [m] at NPSH_r_Q", min=0.0, kind="array"),
+        Param(
+            "cavitation",
+            "1",
+            "stop",
+            "when NPSH_a falls below NPSH_r (or the suction flashes): stop the run, or warn",
+            kind="string",
+            choices=("stop", "warn"),
+        ),
     )
     FLUID_PORTS = (
         FluidPort("inlet", "inlet", "m", "resistance", "suction"),
@@ -187,6 +269,7 @@ class Pump(Component):
                 f"component '{self.name}' (Pump): the head curve's quadratic coefficient b = "
                 f"{self.b:g} s2/m5 must be < 0 (the head must fall with the flow)"
             )
+        self._npsh_r = self._npsh_curve()
         self._eta_table = None
         if (P["eta_Q"] is None) != (P["eta_values"] is None):
             raise PlantError(
@@ -205,6 +288,27 @@ class Pump(Component):
             self._eta_table = (PchipInterpolator(q, e), q[0], q[-1])
         elif P["eta"] <= 0:
             raise PlantError(f"component '{self.name}' (Pump): parameter 'eta' must be > 0")
+
+    def _npsh_curve(self):
+        """NPSH_r_1(q) [m] at nominal speed: None, a number, or a PCHIP of the points
+        NPSH_r_Q, NPSH_r_values held at its end values."""
+        P = self.params
+        name = f"component '{self.name}' (Pump)"
+        if (P["NPSH_r_Q"] is None) != (P["NPSH_r_values"] is None):
+            raise PlantError(f"{name}: give both 'NPSH_r_Q' and 'NPSH_r_values'")
+        if P["NPSH_r_Q"] is not None:
+            if P["NPSH_r"] is not None:
+                raise PlantError(f"{name}: give NPSH_r as a number or as a curve, not both")
+            q, v = np.asarray(P["NPSH_r_Q"]), np.asarray(P["NPSH_r_values"])
+            if q.size != v.size or q.size < 2 or np.any(np.diff(q) <= 0):
+                raise PlantError(
+                    f"{name}: 'NPSH_r_Q' must rise strictly and have as many (at least 2) "
+                    "entries as 'NPSH_r_values'"
+                )
+            from scipy.interpolate import PchipInterpolator
+
+            return (PchipInterpolator(q, v), float(q[0]), float(q[-1]))
+        return P["NPSH_r"]
 
     def _curve(self):
         """(H0 [m], a [s/m2], b [s2/m5]) from whichever way the curve was given."""
@@ -250,10 +354,10 @@ class Pump(Component):
 
     def fluid_ports(self):
         ports = flow_through_ports(self.m_eps, "h_2")
-        if self.casing:  # the casing's fluid leaves at both ports
-            ports[0] = FluidPort(
-                "inlet", "inlet", "m", "resistance", h_out="h_2", h_source=False, m_eps=self.m_eps
-            )
+        # reverse flow leaves through the inlet with h_1 (``reverse`` equation)
+        ports[0] = FluidPort(
+            "inlet", "inlet", "m", "resistance", h_out="h_1", h_source=False, m_eps=self.m_eps
+        )
         return ports
 
     def signal_inputs(self):
@@ -278,6 +382,12 @@ class Pump(Component):
                 doc="shaft work done on the fluid, integral of P dt",
                 accumulator=True,
             ),
+            Variable(
+                "h_1",
+                "J/kg",
+                1e5,
+                doc="enthalpy of the fluid leaving through the inlet (reverse flow)",
+            ),
         ]
 
     def equations(self):
@@ -295,9 +405,39 @@ class Pump(Component):
                     doc="h_2 = h_in + softplus(p_out - p_in)/(rho eta)",
                     residual=self._enthalpy,
                 ),
+                Equation(
+                    "power",
+                    y=("P", "m", "h_2", "h_1", "inlet.h", "outlet.h"),
+                    unit="W",
+                    doc="P = w(m) (h_2 - h_in) + w(-m) (h_1 - h_out)",
+                    residual=self._power,
+                ),
             ]
-            + shaft_work_equations(self, "inlet.h", "h_2")
+            + shaft_work_equations(self, "inlet.h", "h_2")[1:]  # work: dW/dt = P
+            + [self._reverse_equation("outlet.h")]
         )
+
+    def _reverse_equation(self, h_back):
+        """h_1 = sigma(m) h_back + (1 - sigma(m)) h_in: what leaves through the inlet."""
+        return Equation(
+            "reverse",
+            y=("h_1", "m", "inlet.h", h_back),
+            unit="J/kg",
+            doc=f"h_1 = sigma(m) {h_back} + (1 - sigma(m)) h_in",
+            residual=lambda t, x, xp: x["h_1"] - self.reverse_enthalpy(x, x[h_back]),
+        )
+
+    def reverse_enthalpy(self, x, h_back) -> float:
+        """h_1 [J/kg]: h_back (the discharge node's h; with the casing, h_2) for
+        m <= -m_eps, the suction node's own h for m >= 0 (``physics.reverse_fraction``)."""
+        s = reverse_fraction(x["m"], self.m_eps)
+        return s * h_back + (1.0 - s) * x["inlet.h"]
+
+    def _power(self, t, x, xp):
+        m = x["m"]
+        w = float(upwind_weight(m, self.m_eps))
+        w_back = float(upwind_weight(-m, self.m_eps))
+        return x["P"] - w * (x["h_2"] - x["inlet.h"]) - w_back * (x["h_1"] - x["outlet.h"])
 
     def _head_equations(self, n, nodes):
         """The head curve and the pressure rise; nodes: the variables rho is read from."""
@@ -335,15 +475,16 @@ class Pump(Component):
                 ),
                 Equation(
                     "energy",
-                    y=("h_2", "m", "P", "inlet.h", "outlet.h"),
+                    y=("h_2", "m", "P", "h_1", "inlet.h", "outlet.h"),
                     yp=("h_2",),
                     unit="W",
-                    doc=f"{M:g} dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_2) + P",
+                    doc=f"{M:g} dh_2/dt = w(m) (h_in - h_2) + w(-m) (h_out - h_1) + P",
                     residual=self._casing_energy,
                 ),
             ]
-            + shaft_work_equations(self, "inlet.h", "h_2")[1:]
-        )  # work: dW/dt = P
+            + shaft_work_equations(self, "inlet.h", "h_2")[1:]  # work: dW/dt = P
+            + [self._reverse_equation("h_2")]
+        )
 
     def shaft_power(self, t, x) -> float:
         """P [W] with the casing: w(m) softplus(dp, dp_reg)/(rho eta) + P_0 r^3."""
@@ -358,14 +499,143 @@ class Pump(Component):
         m, h = x["m"], x["h_2"]
         w_in = float(upwind_weight(m, self.m_eps))
         w_back = float(upwind_weight(-m, self.m_eps))
-        gain = w_in * (x["inlet.h"] - h) + w_back * (x["outlet.h"] - h) + x["P"]
+        gain = w_in * (x["inlet.h"] - h) + w_back * (x["outlet.h"] - x["h_1"]) + x["P"]
         return self.params["M_casing"] * xp["h_2"] - gain
 
     def outputs(self):
-        return [Output("T_2", "K", "temperature at h_2 and the discharge pressure")]
+        out = [Output("T_2", "K", "temperature at h_2 and the discharge pressure")]
+        if self.npsh_checked:
+            out.append(Output("NPSH_a", "m", "net positive suction head available"))
+            if self._npsh_r is not None:
+                out.append(Output("NPSH_r", "m", "net positive suction head required"))
+        return out
 
     def output_values(self, t, x, xp):
-        return [float(self.medium.state(x["outlet.p"], x["h_2"]).T)]
+        out = [float(self.medium.state(x["outlet.p"], x["h_2"]).T)]
+        if self.npsh_checked:
+            out.append(self.npsh_available(x))
+            if self._npsh_r is not None:
+                out.append(self.npsh_required(t, x))
+        return out
+
+    # ------------------------------------------------------------------ NPSH
+    @property
+    def npsh_checked(self) -> bool:
+        """True for a condensable medium (a liquid that can flash at the suction)."""
+        return self.medium is None or is_condensable(self.medium)
+
+    def suction_state(self, x):
+        """(rho [kg/m3], T [K], T_sat [K] or nan, h' [J/kg] or nan) at the suction node."""
+        medium = self.medium
+        p, h = x["inlet.p"], x["inlet.h"]
+        st = medium.state(p, h)
+        hl, _ = saturation_enthalpies(medium, p)
+        hl = float(hl[0])
+        T_sat = float(medium.state(p, hl).T) if math.isfinite(hl) else math.nan
+        return float(st.rho), float(st.T), T_sat, hl
+
+    def npsh_available(self, x) -> float:
+        """NPSH_a [m] at the suction node (p_in, h_in); see the class doc."""
+        p, h = x["inlet.p"], x["inlet.h"]
+        rho, T, _, hl = self.suction_state(x)
+        A = self.params["A_suction"]
+        v = x["m"] / (rho * A) if A else 0.0
+        head = v * v / (2.0 * G)
+        if math.isfinite(hl) and h > hl:  # flashing: the enthalpy above h' as head
+            return head - (h - hl) / G
+        p_v, _ = vapour_pressure(self.medium, T)
+        return (p - p_v) / (rho * G) + head
+
+    def npsh_required(self, t, x) -> float:
+        """NPSH_r(Q, r) = r^2 NPSH_r_1(Q/r) [m] (affinity law); 0 without a given NPSH_r."""
+        f = self._npsh_r
+        if f is None:
+            return 0.0
+        r = self.speed(t, x)
+        if not isinstance(f, tuple):
+            return float(f) * r * r
+        curve, q0, q1 = f
+        rho = self.density(x)
+        q = min(max(x["m"] / rho / max(r, 1e-3), q0), q1)
+        return float(curve(q)) * r * r
+
+    def cavitation_margin(self, t, x) -> float:
+        """NPSH_a - NPSH_r [m], plus (H0 + 10 m) sigma(m) for reverse flow (no suction)."""
+        lift = (self.H0 + NPSH_REVERSE_MARGIN) * reverse_fraction(x["m"], self.m_eps)
+        return self.npsh_available(x) - self.npsh_required(t, x) + lift
+
+    def cavitation_message(self, t, x) -> str:
+        """The plain text of a cavitating pump at t, from the values in x."""
+        a, r = self.npsh_available(x), self.npsh_required(t, x)
+        _, T, T_sat, _ = self.suction_state(x)
+        p = x["inlet.p"]
+        if a <= 0.0:
+            what = "the suction flashes (NPSH_a <= 0: the inlet is at or above saturation)"
+        else:
+            what = "the NPSH available fell below the NPSH required"
+        sat = f" (saturation {T_sat - 273.15:.2f} °C)" if math.isfinite(T_sat) else ""
+        given = "" if self._npsh_r is not None else " (none given)"
+        text = (
+            f"pump '{self.name}' (Pump): cavitation at t = {t:.6g} s: {what}: NPSH_a = "
+            f"{a:.4f} m, NPSH_r = {r:.4f} m{given} at {x['m']:.4g} kg/s; suction {p / 1e5:.6g} "
+            f"bar, {T - 273.15:.2f} °C{sat}. Raise the suction head (a vessel above the "
+            "pump: a suction pipe with dz < 0) or the subcooling of the suction"
+        )
+        if self.params["cavitation"] == "stop":
+            text += ', or give cavitation = "warn" to go on'
+        return text
+
+    def switches(self):
+        if not self.npsh_checked:
+            return []
+        last = {}
+
+        def g(t, x, xp):
+            last["t"], last["x"] = t, {k: x[k] for k in self._npsh_reads()}
+            return self.cavitation_margin(t, x)
+
+        def message(t):
+            x = last.get("x")
+            return self.cavitation_message(t, x) if x is not None else None
+
+        def warn(t, x, xp):  # cavitation = "warn": the message at the located crossing
+            text = self.cavitation_message(t, x)
+            warnings = x.modes.setdefault("warnings", [])
+            if text not in warnings:  # the action of one crossing may run twice
+                warnings.append(text)
+
+        stop = self.params["cavitation"] == "stop"
+        return [
+            Switch(
+                "cavitation",
+                g,
+                direction=-1,
+                action=None if stop else warn,
+                terminal=stop,
+                message=message if stop else None,
+                doc="NPSH_a - NPSH_r [m] (+ margin for reverse flow): falls through 0",
+            )
+        ]
+
+    def _npsh_reads(self):
+        n = ("n",) if self.speed_from_signal else ()
+        extra = ("outlet.p", "outlet.h") + (("h_2",) if self.casing else ())
+        return ("m", "inlet.p", "inlet.h") + extra + n
+
+    def init_discrete_state(self, t0, x, xp):
+        """A pump that cavitates at the start: PlantError (cavitation = "stop"), or a
+        warning in its modes (``modes["warnings"]``: ``System.warnings``)."""
+        if self.npsh_checked and self.cavitation_margin(t0, x) < 0.0:
+            text = self.cavitation_message(t0, x).replace(
+                "cavitation at", "cavitates at the start,"
+            )
+            text = text.replace("fell below", "is below")
+            if self.params["cavitation"] == "stop":
+                raise PlantError(text)
+            warnings = x.modes.setdefault("warnings", [])
+            if text not in warnings:  # the start may try its modes several times
+                warnings.append(text)
+        return False
 
     # --------------------------------------------------------------- physics
     def speed(self, t, x):
@@ -373,18 +643,26 @@ class Pump(Component):
         return x["n"] if self.speed_from_signal else self.param_at("speed", t)
 
     def density(self, x):
-        """Density of the fluid entering the pump [kg/m3] (smooth upwind by m); with
-        the casing, of the fluid in the pump, rho(p_in, h_2). Why not upwind there:
-        against a closed valve the casing water is hotter than the suction, and a
-        density blended across the flow band |m| < m_eps makes p_out - p_in =
-        rho g H rise with m near m = 0 (14 K: +2.7e5 Pa per kg/s against the curve's
-        -200), so the reopening valve found no unique flow (Newton diverged)."""
+        """Density of the fluid in the pump [kg/m3]: the suction's for m >= 0, the
+        discharge node's for m <= -m_eps, blended by sigma(m) between (class doc);
+        with the casing, rho(p_out, h_2), the casing water's at the delivery pressure
+        (as T_2). Why not blended there: against a closed valve the casing water is
+        hotter than the suction, and a density blended across the flow band |m| <
+        m_eps makes p_out - p_in = rho g H rise with m near m = 0 (14 K: +2.7e5 Pa
+        per kg/s against the curve's -200), so the reopening valve found no unique
+        flow (Newton diverged). Why at p_out: h_2 holds the enthalpy rise of
+        compression and losses, and a 150 degC deaerator suction, 1.8 K subcooled,
+        is below that rise from saturation: at p_in the casing water was two-phase,
+        the head fell to 1/3 and the pump never opened its check valve."""
         medium = self.medium
         if self.casing:
-            return float(medium.state(x["inlet.p"], x["h_2"]).rho)
-        rho_in = medium.state(x["inlet.p"], x["inlet.h"]).rho
-        rho_out = medium.state(x["outlet.p"], x["outlet.h"]).rho
-        return float(upwind_mean(x["m"], rho_in, rho_out, self.m_eps))
+            return float(medium.state(x["outlet.p"], x["h_2"]).rho)
+        rho_in = float(medium.state(x["inlet.p"], x["inlet.h"]).rho)
+        s = reverse_fraction(x["m"], self.m_eps)
+        if s == 0.0:
+            return rho_in
+        rho_out = float(medium.state(x["outlet.p"], x["outlet.h"]).rho)
+        return s * rho_out + (1.0 - s) * rho_in
 
     def head(self, Q, r, rho):
         """H(Q, r) [m] at volume flow Q [m3/s], relative speed r, density rho [kg/m3]."""
@@ -447,6 +725,7 @@ class Pump(Component):
             x["P"] += self.params["P_shutoff"] * r**3
             x["h_2"] += self.params["P_shutoff"] * r**3 / mn
         x["W"] = 0.0
+        x["h_1"] = x["inlet.h"]
         # the discharge node: the pump's pressure rise on the suction guess
         x["outlet.p"] = max(x["inlet.p"] + rho * G * H, x["inlet.p"])
         x["outlet.h"] = x["h_2"]
