@@ -592,13 +592,20 @@ class Pump(Component):
 
         def g(t, x, xp):
             last["t"], last["x"] = t, {k: x[k] for k in self._npsh_reads()}
-            return self.cavitation_margin(t, x)
+            margin = self.cavitation_margin(t, x)
+            # warn mode: while cavitating the switch watches the recovery (g = -margin),
+            # so that each crossing toggles the mode and moves g to its positive side
+            return -margin if x.modes.get("cavitating") else margin
 
         def message(t):
             x = last.get("x")
             return self.cavitation_message(t, x) if x is not None else None
 
         def warn(t, x, xp):  # cavitation = "warn": the message at the located crossing
+            if x.modes.get("cavitating"):  # NPSH_a rose above NPSH_r again
+                x.modes["cavitating"] = False
+                return
+            x.modes["cavitating"] = True
             text = self.cavitation_message(t, x)
             warnings = x.modes.setdefault("warnings", [])
             if text not in warnings:  # the action of one crossing may run twice
@@ -613,7 +620,8 @@ class Pump(Component):
                 action=None if stop else warn,
                 terminal=stop,
                 message=message if stop else None,
-                doc="NPSH_a - NPSH_r [m] (+ margin for reverse flow): falls through 0",
+                doc="NPSH_a - NPSH_r [m] (+ margin for reverse flow): falls through 0 (with "
+                'cavitation = "warn": its negative while the pump cavitates, the recovery)',
             )
         ]
 
@@ -635,6 +643,8 @@ class Pump(Component):
             warnings = x.modes.setdefault("warnings", [])
             if text not in warnings:  # the start may try its modes several times
                 warnings.append(text)
+            if not x.modes.get("cavitating"):
+                x.modes["cavitating"] = True  # the switch now watches the recovery
         return False
 
     # --------------------------------------------------------------- physics
