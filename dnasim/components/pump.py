@@ -30,9 +30,9 @@ from dnasim.components.physics import (
 )
 from dnasim.errors import PlantError
 
-#: head [m] added to the cavitation switch function for reverse flow (m <= -m_eps,
-#: weighted by physics.reverse_fraction): a pump that does not draw from its suction
-#: does not cavitate; the margin is the shut-off head plus this
+#: head [m] above the shut-off head that the cavitation switch function takes for
+#: reverse flow (m <= -m_eps, blended by physics.reverse_fraction): a pump that does
+#: not draw from its suction does not cavitate
 NPSH_REVERSE_MARGIN = 10.0
 
 
@@ -560,9 +560,14 @@ class Pump(Component):
         return float(curve(q)) * r * r
 
     def cavitation_margin(self, t, x) -> float:
-        """NPSH_a - NPSH_r [m], plus (H0 + 10 m) sigma(m) for reverse flow (no suction)."""
-        lift = (self.H0 + NPSH_REVERSE_MARGIN) * reverse_fraction(x["m"], self.m_eps)
-        return self.npsh_available(x) - self.npsh_required(t, x) + lift
+        """NPSH_a - NPSH_r [m] for forward flow, blended into H0 + 10 m for reverse flow
+        (w = physics.reverse_fraction(m)): (1 - w)(NPSH_a - NPSH_r) + w (H0 + 10 m). A
+        pump that is flowed through backwards draws nothing from its suction and does
+        not cavitate, however hot the fluid at its inlet node (it came from the
+        discharge side: a stopped feed pump back-fed by its drum)."""
+        w = reverse_fraction(x["m"], self.m_eps)
+        forward = self.npsh_available(x) - self.npsh_required(t, x)
+        return (1.0 - w) * forward + w * (self.H0 + NPSH_REVERSE_MARGIN)
 
     def cavitation_message(self, t, x) -> str:
         """The plain text of a cavitating pump at t, from the values in x."""
