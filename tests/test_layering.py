@@ -34,7 +34,7 @@ STAGES: list[tuple[str, list[str]]] = [
     ("system", ["dnasim.system", "dnasim.structure"]),
     ("compiler", ["dnasim.compiler"]),
     ("solver", ["dnasim.solver", "dnasim.initialization", "dnasim.initial_guess"]),
-    ("start", ["dnasim.start"]),
+    ("start", ["dnasim.start", "dnasim.steady_state"]),
     ("results", ["dnasim.results", "dnasim.output", "dnasim.sinks"]),
     ("backends", ["dnasim.backends"]),
     ("simulation", ["dnasim.simulation"]),

@@ -882,6 +882,23 @@ class Component:
         in x are the upstream components' guesses). Not called for a given start, whose
         initial state ``initial_guess`` defines. Default: nothing."""
 
+    def free_at_rest(self, t0: float, x: LocalVector) -> tuple[str, ...]:
+        """Hook for the steady start: the differential variables (local names) that a
+        state at rest leaves undetermined in the current discrete mode, because no
+        equation reads them there: the held integral of a PI controller saturated at a
+        limit (its output is the limit, whatever the integral). The steady start keeps
+        their values and solves their derivatives instead, as for accumulators
+        (``dnasim.steady_state``). Default: none."""
+        return ()
+
+    def steady_problems(self, t0: float, x: LocalVector) -> list[str]:
+        """Hook for the steady start: why the state at rest x lies outside this
+        component's stated range, one sentence each in plant terms (a sink-only boundary
+        that would feed the plant, a check valve passing reverse flow, a vessel level
+        outside the vessel); the steady start then stops with them
+        (``dnasim.steady_state``). Default: none."""
+        return []
+
     def reset_discrete_state(self, modes: dict) -> None:
         """Hook: put the discrete modes back to their default before a simulation.
 

@@ -16,7 +16,7 @@ from dnasim.components.base import (
     Variable,
     flow_through_ports,
 )
-from dnasim.components.physics import softplus, upwind_mean, valve_flow
+from dnasim.components.physics import M_EPS_REL, softplus, upwind_mean, valve_flow
 from dnasim.errors import PlantError
 
 #: Kv [m3/h] -> K [m2] in m = K sqrt(rho dp): Kv is the water flow in m3/h at
@@ -364,3 +364,29 @@ class CheckValve(ControlValve):
 
     def initial_guess(self, t0, x):
         x["m"] = self.flow(t0, x)
+
+    #: reverse flow through the closed valve beyond this multiple of its leakage flow at
+    #: the reverse pressure difference is outside its range (``steady_problems``)
+    REVERSE_LEAK_FACTOR = 10.0
+
+    def steady_problems(self, t0, x):
+        """Reverse flow (m < 0) above REVERSE_LEAK_FACTOR times the leakage flow at rest
+        (``Component.steady_problems``); the valve's law gives at most its leakage, so
+        this flags a state the solver found outside the model's range."""
+        m = x["m"]
+        if m >= -M_EPS_REL * self.params["m_nominal"]:
+            return []
+        try:
+            leak = (
+                self.params["leakage"]
+                * self.K
+                * abs(self.iec_factor(x, x["inlet.p"] - x["outlet.p"]))
+            )
+        except Exception:  # noqa: BLE001 - a range check must not hide the state
+            leak = 0.0
+        if abs(m) <= self.REVERSE_LEAK_FACTOR * leak:
+            return []
+        return [
+            f"check valve '{self.name}' passes {-m:.4g} kg/s in reverse at rest, more than its "
+            "leakage"
+        ]

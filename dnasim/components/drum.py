@@ -365,6 +365,16 @@ class _SaturatedVessel(Component):
         V_l = P["V_l0"] if P["V_l0"] is not None else P["V_t"] / 2
         return p, V_l
 
+    def steady_problems(self, t0, x):
+        """A liquid volume outside (0, V_t) at rest (``Component.steady_problems``)."""
+        V_l, V_t = x["V_l"], self.params["V_t"]
+        if 0.0 < V_l < V_t:
+            return []
+        return [
+            f"{type(self).__name__.lower()} '{self.name}' would hold V_l = {V_l:.4g} m3 of "
+            f"liquid at rest, outside the vessel's volume 0 .. {V_t:g} m3"
+        ]
+
     def guess_nodes(self, t0):
         if self.params["p0"] is None:
             return {}
