@@ -7,9 +7,11 @@ solved), found by ``dnasim.steady_state.find_steady_state`` (Newton from the gue
 pseudo-transient continuation, the controllers' limits chosen at rest, the
 components' ranges checked); start="given": the components' given initial states
 (differential variables fixed), the algebraic variables and y' solved from
-``initial_guess`` (with its march of the enthalpies along the flow) by
-``dnasim.initialization.solve_mixed``, the discrete modes (``System.modes``) reset
-first and chosen to fit the initial values (at most 3 passes).
+``initial_guess`` (its march of the enthalpies along the flow first, then the node
+pressures copied or interpolated: they differ only where a node has no storage
+next to it) by ``dnasim.initialization.solve_mixed``, the discrete modes
+(``System.modes``) reset first and chosen to fit the initial values (at most 3
+passes).
 """
 
 from __future__ import annotations
@@ -34,23 +36,30 @@ def initial_values(system, t0: float = 0.0, start: str = "steady"):
     from dnasim.initial_guess import initial_guess
     from dnasim.initialization import solve_mixed
 
-    system.reset_modes()
-    # the march: node enthalpies along the flow (a feed line downstream of its pump
-    # starts with the pump's water, not with the drum's: from the drum's enthalpy its
-    # Newton found a steam-bound state with no feed flow)
-    y = initial_guess(system, t0, march=True)
-    yp = np.zeros(system.n)
-    unknown = system.algebraic.copy()
     what = f"given start of plant '{system.name}'"
-    for _ in range(3):
-        y, yp = solve_mixed(system, t0, y, yp, unknown, what=what)
-        changed = False
-        for b in system.blocks:
-            if b.comp.init_discrete_state(t0, b.local(y), b.local(yp)):
-                changed = True
-        if not changed:
-            break
-    return y, yp
+    first = None
+    # the march first (node enthalpies along the flow: a feed line downstream of its
+    # pump starts with the pump's water, not with the drum's, from which its Newton
+    # found a steam-bound state with no feed flow); then the guesses of the steady
+    # start's first stage, which differ in the node pressures only (a chain of valves
+    # with no volume between them, tests/plants/valve_chain_check.toml)
+    for kw in ({"march": True}, {}, {"interpolate": True}):
+        system.reset_modes()
+        y = initial_guess(system, t0, **kw)
+        yp = np.zeros(system.n)
+        try:
+            for _ in range(3):
+                y, yp = solve_mixed(system, t0, y, yp, system.algebraic.copy(), what=what)
+                changed = False
+                for b in system.blocks:
+                    if b.comp.init_discrete_state(t0, b.local(y), b.local(yp)):
+                        changed = True
+                if not changed:
+                    break
+            return y, yp
+        except PlantError as err:
+            first = first or err
+    raise first
 
 
 def reinitialise(system, t: float, y, yp):

@@ -899,6 +899,21 @@ class Component:
         (``dnasim.steady_state``). Default: none."""
         return []
 
+    def design_values(self, t0: float, x: LocalVector) -> dict[str, float]:
+        """Hook for the design-point table (``dnasim steady``): what an engineer checks
+        first at a state x, by key (each only where the component has it):
+
+          m           mass flow through the component [kg/s]
+          duty        heat into the component's fluid [W] (< 0: heat out of it)
+          heat_in     the part of duty that is heat from outside the plant's working
+                      fluid (a furnace, a fixed wall, flue gas) [W]
+          power       shaft power into the fluid [W] (a pump > 0, a turbine < 0)
+          opening     a valve's opening z, a controller's output z [-]
+          efficiency  a machine's efficiency [-]
+
+        Default: ``m`` when the component has a variable of that name."""
+        return {"m": x["m"]} if "m" in x.index and not isinstance(x.index["m"], slice) else {}
+
     def reset_discrete_state(self, modes: dict) -> None:
         """Hook: put the discrete modes back to their default before a simulation.
 

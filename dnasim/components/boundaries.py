@@ -347,10 +347,10 @@ class _Boundary(Component):
             return []
         return [
             f"boundary '{self.name}' ({type(self).__name__}) is a sink only, but at rest "
-            f"{m:.4g} kg/s would enter the plant through it (at p = {x['port.p'] / 1e5:.6g} "
-            "bar): the plant has no steady state with flow out of it there. Check its "
-            "pressure against the plant's (a sink above the pressure upstream feeds the "
-            "plant), or give T or h if fluid may enter there"
+            f"{m:.4g} kg/s would enter the plant through it (node pressure "
+            f"{x['port.p'] / 1e5:.6g} bar): a sink gives no state for fluid entering the plant. "
+            "Check its pressure or flow against the plant's (a sink above the pressure "
+            "upstream feeds the plant), or give T or h if fluid may enter there"
         ]
 
     def initial_guess(self, t0, x):

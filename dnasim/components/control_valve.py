@@ -320,6 +320,9 @@ class ControlValve(Component):
             dp_e = x_e * p1
         return Y * math.sqrt(rho1) * valve_flow(1.0, 1.0, dp_e, reg)
 
+    def design_values(self, t0, x):
+        return {"m": x["m"], "opening": self.opening(t0, x)}
+
     def initial_guess(self, t0, x):
         try:
             x["m"] = self.flow(t0, x) if not self.opening_from_signal else 0.0

@@ -333,5 +333,8 @@ class PIController(Component):
         winds at dm_I/dt = KI e."""
         return ("m_I",) if self._mode(x) != "free" else ()
 
+    def design_values(self, t0, x):
+        return {"opening": x["z"]}
+
     def steady_problems(self, t0, x):
         return output_range_problems(self, x)

@@ -375,6 +375,18 @@ class _SaturatedVessel(Component):
             f"liquid at rest, outside the vessel's volume 0 .. {V_t:g} m3"
         ]
 
+    def design_values(self, t0, x):
+        """The heat input Q [W] (heat from outside: a furnace, when positive) and the
+        flow of the first outlet (the steam of a drum, the feed water of a tank)."""
+        Q = self.heat(t0, x)
+        out = {"duty": Q}
+        if Q > 0.0:
+            out["heat_in"] = Q
+        first_out = next((n for n, role, _, _ in self.PORTS if role == "outlet"), None)
+        if first_out is not None:
+            out["m"] = x[f"m_{first_out}"]
+        return out
+
     def guess_nodes(self, t0):
         if self.params["p0"] is None:
             return {}

@@ -408,5 +408,8 @@ class PIDController(Component):
             return ()
         return ("m_I",) if self._automatic(t0) else ()
 
+    def design_values(self, t0, x):
+        return {"opening": x["z"]}
+
     def steady_problems(self, t0, x):
         return output_range_problems(self, x)

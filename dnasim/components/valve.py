@@ -116,6 +116,10 @@ class Valve(Component):
         z_e = self.effective_opening(t, v[3] if self.opening_from_signal else None)
         return [m - valve_flow(self.params["C"], z_e, p_in - p_out, self.params["dp_reg"])]
 
+    def design_values(self, t0, x):
+        z = x["z"] if self.opening_from_signal else self.param_at("opening", t0)
+        return {"m": x["m"], "opening": z}
+
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
         z = self.opening(t0, x) if not self.opening_from_signal else 0.5
