@@ -754,6 +754,7 @@ def steady_message(system, t0, err, first=None) -> str:
         causes += limit_problems(system, t0, y, yp)
         causes += node_problems(system, y)
         causes += flow_problems(system, y)
+        causes += no_flow_problems(system, y)
         causes += open_balances(system, t0, y)
     text = (
         f"At t = {t0:.10g}, steady start of plant '{system.name}': no state at rest found "
@@ -917,8 +918,37 @@ def open_balances(system, t0, y, count=3) -> list[str]:
         if rate <= 1e-9:
             break
         unit = system.units.get(system.names[j], "")
-        out.append(
+        unit = "" if unit in ("1", "-") else unit
+        text = (
             f"{system.eq_names[i]} does not balance: {system.names[j]} = {y[j]:.4g} {unit} "
-            f"would change at {dydt:.3g} {unit}/s"
+            f"would change at {dydt:.3g} {unit + '/s' if unit else 'per s'}".replace("  ", " ")
         )
+        owner = system.var_owner[j]
+        k = system.index.get(f"{owner}.p")
+        if k is not None and system.units.get(system.names[k]) == "Pa":
+            text += f" (its pressure {owner}.p = {y[k] / 1e5:.5g} bar)"
+        out.append(text)
     return out
+
+
+def no_flow_problems(system, y, count=2) -> list[str]:
+    """Flow-through components (inlet and outlet ports, one flow m) whose flow is below
+    1e-3 of their nominal value at y, with the pressures at both ends: a pump against
+    a pressure above its shut-off head, a check valve held shut."""
+    out = []
+    for name, comp in system.components.items():
+        k = system.index.get(f"{name}.m")
+        m_nom = comp.params.get("m_nominal") or 0.0
+        if k is None or not m_nom or abs(y[k]) >= 1e-3 * m_nom:
+            continue
+        try:
+            n_in = system.connections[(name, "inlet")]
+            n_out = system.connections[(name, "outlet")]
+        except KeyError:
+            continue
+        p_in, p_out = y[system.node_index[n_in]], y[system.node_index[n_out]]
+        out.append(
+            f"'{name}' ({type(comp).__name__}) passes {y[k]:.3g} kg/s (nominal {m_nom:g} "
+            f"kg/s) from {p_in / 1e5:.5g} bar at '{n_in}' to {p_out / 1e5:.5g} bar at '{n_out}'"
+        )
+    return out[:count]
