@@ -7,7 +7,8 @@ with their message; node guesses; the design-point table of ``dnasim steady``.
 
 Every plant here failed on 834cc95 (its steady start said "no steady state found",
 "singular Jacobian", or exited 0 with a controller output outside [0, 1]; its given
-start of the feed line found a steam-bound state), unless a test says otherwise.
+start of the feed line found a steam-bound state), unless a test says otherwise (the
+superheater with sprays and the saturated spray: regression tests).
 """
 
 from __future__ import annotations
@@ -208,8 +209,9 @@ def test_superheater_sprays_given_start_settles_at_the_steady_start():
 
 def test_saturated_spray_at_rest_matches_the_settled_run(tmp_path):
     # plants/attemperator.toml with a spray valve a tenth the size: to hold 450 degC
-    # the controller would need z > 1 (on 834cc95: "no steady state found"). The
-    # limit engages, the steam stays above the set point and the back-calculation
+    # the controller would need z > 1. (834cc95 found this state too, for this
+    # PIDController; for the PIController, whose held integral no equation reads when
+    # saturated, it said "no steady state found": tests/test_faults.py.) The limit engages, the steam stays above the set point and the back-calculation
     # keeps v just above z_max (v - z_max = T_t Kp e / T_i at rest): a state at rest
     # with the controller saturated, the one a long given start settles at
     text = (ROOT / "plants" / "attemperator.toml").read_text()
