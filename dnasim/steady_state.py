@@ -12,14 +12,20 @@ no equation reads the integral).
 
 How it is found (each stage only when the one before failed):
 
-1. **Newton from the guess** (``initial_guess``: node guesses of the plant file first,
-   then the components' guesses and their steady marches), the controllers free of
-   their limits: ``dnasim.initialization.solve_mixed``, the globalised Newton of
-   every start. Most plants end here.
+1. **Newton from three guesses** in turn (``initial_guess``, the plant file's node
+   guesses winning over the rest): the components' guesses with the node pressures
+   copied along the streams; the same with the unguessed pressures interpolated
+   between the guessed ones (these two were the steady start before, so a plant they
+   solve keeps its numbers); the march (enthalpies along the flow, pressures through
+   pipes and vessels before valves, set points as guesses of what they measure). The
+   controllers are free of their limits; ``dnasim.initialization.solve_mixed``, the
+   globalised Newton of every start. Most plants end here.
 2. **Pseudo-transient continuation** (Kelley and Keyes 1998; the "false transient"
    of process simulators): the plant's own dynamics, the time frozen at t0, integrated
    towards rest by implicit Euler with pseudo time steps that grow by up to 4 per
-   step, from the given-start state made consistent (its algebraic variables solved).
+   step, from the march's state made consistent (its algebraic variables solved, the
+   differential ones as guessed: the given start's where components have initial
+   values).
    Each step is a Newton iteration on F(t0, y, (y - y_k)/dt) = 0 with the Jacobian
    dF/dy + dF/dy'/dt from the two finite-difference Jacobians, kept while Newton
    converges; a step whose Newton fails is retried with dt/4. The controllers' limits
@@ -568,11 +574,6 @@ def _mode_key(system) -> tuple:
         if _switch_block(b):
             out.append((b.comp.name, tuple(sorted((k, str(v)) for k, v in b.modes.items()))))
     return tuple(out)
-
-
-def _with_changed_modes(system, t0, y, yp):
-    """y after a change of modes (a copy)."""
-    return np.array(y, dtype=float)
 
 
 def saturated_controllers(system) -> list[tuple[str, str]]:
