@@ -622,7 +622,15 @@ def _saturation_notes(system, t0, rest) -> list[str]:
         text = f"controller '{name}' holds its output at {limit} = {value:g} at rest"
         if "e" in x:
             text += f" (error e = {x['e']:.4g})"
-        notes.append(text + ": its set point is not reached")
+        text += ": its set point is not reached"
+        if "m_I" in x:
+            rate = b.local(rest.yp)["m_I"]
+            if rate != 0.0:
+                text += (
+                    f"; without anti-windup its integral winds at dm_I/dt = {rate:.3g} per s, "
+                    "so the longer it stays saturated, the later it leaves the limit"
+                )
+        notes.append(text)
     return notes
 
 

@@ -411,3 +411,23 @@ def test_dnasim_steady_engineering_units(tmp_path):
     with open(tmp_path / "nodes.csv", newline="") as f:
         nodes = {r["name"]: r for r in csv.DictReader(f)}
     assert float(nodes["n_lp_out"]["p [bar]"]) == pytest.approx(12.0, rel=1e-9)  # the set point
+
+
+def test_saturated_pi_without_anti_windup_is_at_rest_but_its_integral_winds(tmp_path):
+    # the seed's plain PI (eqs. 10.13, anti_windup = false) saturated at rest: its
+    # output is the limit, the plant is at rest, and the integral, which no equation
+    # reads there, winds at dm_I/dt = KI e (kept, its rate solved: free_at_rest); the
+    # note says so
+    import dnasim
+    from test_faults import _attemperator_pi_file
+
+    plant = dnasim.load_plant(_attemperator_pi_file(tmp_path))
+    plant.components["turbine"].params["p"] = 1000.0  # [Pa]: the spray would need z > 1
+    plant.components["pi"].params["anti_windup"] = False
+    system = plant.compile()
+    rest = find_steady_state(system, 0.0)
+    at = system.index
+    assert rest.saturated == [("pi", "high")]
+    KI, e = plant.components["pi"].params["KI"], rest.y[at["pi.e"]]
+    assert rest.yp[at["pi.m_I"]] == pytest.approx(KI * e, rel=1e-12)  # dm_I/dt = KI e
+    assert "without anti-windup its integral winds" in rest.notes[0]
