@@ -57,6 +57,8 @@ TOTAL_ROWS = (
 )
 
 
+#: a node within this fraction of h'' (or h') of a saturation line is on it [-]
+SATURATED_BAND = 1e-9
 #: significant digits of the CSV files (the printed tables show 6)
 CSV_DIGITS = 12
 
@@ -150,11 +152,12 @@ def _temperature_and_phase(medium, p, h):
         return T, ""
     if not (np.isfinite(hl) and np.isfinite(hv)):
         return T, "supercritical"
-    if h < hl:
+    band = SATURATED_BAND * hv  # a drum's steam at h''(p) to round-off is saturated
+    if h < hl - band:
         return T, "subcooled"
-    if h > hv:
+    if h > hv + band:
         return T, "superheated"
-    return T, f"{(h - hl) / (hv - hl):.4f}"
+    return T, f"{min(max((h - hl) / (hv - hl), 0.0), 1.0):.4f}"
 
 
 # ------------------------------------------------------------------------------ output
