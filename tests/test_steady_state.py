@@ -211,9 +211,10 @@ def test_saturated_spray_at_rest_matches_the_settled_run(tmp_path):
     # plants/attemperator.toml with a spray valve a tenth the size: to hold 450 degC
     # the controller would need z > 1. (834cc95 found this state too, for this
     # PIDController; for the PIController, whose held integral no equation reads when
-    # saturated, it said "no steady state found": tests/test_faults.py.) The limit engages, the steam stays above the set point and the back-calculation
-    # keeps v just above z_max (v - z_max = T_t Kp e / T_i at rest): a state at rest
-    # with the controller saturated, the one a long given start settles at
+    # saturated, it said "no steady state found": tests/test_faults.py.) The limit
+    # engages, the steam stays above the set point and the back-calculation keeps v just
+    # above z_max (v - z_max = T_t Kp e / T_i at rest): a state at rest with the
+    # controller saturated, the one a long given start settles at
     text = (ROOT / "plants" / "attemperator.toml").read_text()
     text = text.replace('C = "0.002 kg/(s.Pa0.5)"', 'C = "0.0002 kg/(s.Pa0.5)"')
     system = loads(text, "saturated.toml").plant.compile()
@@ -418,8 +419,9 @@ def test_saturated_pi_without_anti_windup_is_at_rest_but_its_integral_winds(tmp_
     # output is the limit, the plant is at rest, and the integral, which no equation
     # reads there, winds at dm_I/dt = KI e (kept, its rate solved: free_at_rest); the
     # note says so
-    import dnasim
     from test_faults import _attemperator_pi_file
+
+    import dnasim
 
     plant = dnasim.load_plant(_attemperator_pi_file(tmp_path))
     plant.components["turbine"].params["p"] = 1000.0  # [Pa]: the spray would need z > 1
