@@ -45,7 +45,7 @@ def water_points(n, water):
     rng = np.random.default_rng(1)
     p = rng.uniform(1e5, 30e6, 2000)
     T = rng.uniform(300.0, 850.0, 2000)
-    h = np.array([_h(water, a, b) for a, b in zip(p, T)])
+    h = np.array([_h(water, a, b) for a, b in zip(p, T, strict=False)])
     return np.resize(p, n), np.resize(h, n)
 
 
@@ -61,7 +61,7 @@ def coolprop_loop(AS, p, h):
 
     HP = CP.HmassP_INPUTS
     failed = 0
-    for a, b in zip(p, h):
+    for a, b in zip(p, h, strict=False):
         try:
             AS.update(HP, b, a)
             AS.viscosity()
@@ -76,7 +76,7 @@ def coolprop_pt_loop(AS, p, T):
     import CoolProp.CoolProp as CP
 
     PT = CP.PT_INPUTS
-    for a, b in zip(p, T):
+    for a, b in zip(p, T, strict=False):
         AS.update(PT, a, b)
         AS.viscosity()
         AS.conductivity()

@@ -1,4 +1,4 @@
-"""The ``dnasim`` command: run, sweep, check, components, plot, linearize.
+"""The ``dnasim`` command: run, steady, sweep, check, components, plot, linearize.
 
 Exit codes: 0 success; 1 the simulation failed or was interrupted (results up to
 that time are on disk); 2 bad input (plant file, options, paths).
@@ -601,6 +601,81 @@ def _check(plant_file, coolprop_cache, allow_import=False):
     if not ok:
         raise InputError(f"{plant_file}: the structural analysis found problems (see above)")
     click.echo("ok")
+
+
+# --------------------------------------------------------------------------- steady
+
+
+@main.command(context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+@click.option(
+    "-o",
+    "--output",
+    "out_dir",
+    default=None,
+    metavar="DIR",
+    help="Also write nodes.csv, components.csv and totals.csv (units in the headers) to DIR.",
+)
+@click.option(
+    "--units",
+    type=click.Choice(["si", "engineering"]),
+    default="si",
+    show_default=True,
+    help="Units of the tables: SI, or engineering (degC, bar, t/h, kJ/kg, MW).",
+)
+@_COOLPROP_CACHE_OPTION
+def steady(plant_file, out_dir, units, coolprop_cache):
+    """The plant at rest at its start time: the design-point table (per node p, T, h,
+    quality or phase, mass flow; per component duty, power, opening, efficiency; plant
+    totals), found by the steady start of `dnasim run` (start = "steady"). Exits 2
+    with the reason when the plant has no state at rest inside its components'
+    ranges."""
+    old = _catch_sigterm()
+    try:
+        _steady(plant_file, out_dir, units, coolprop_cache)
+    except (KeyboardInterrupt, _Terminate) as exc:
+        what = "SIGTERM" if isinstance(exc, _Terminate) else "Ctrl-C"
+        raise SimulationFailed(f"{plant_file}: steady interrupted ({what})") from None
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+
+
+def _steady(plant_file, out_dir, units, coolprop_cache):
+    from dnasim.errors import DnasimError, OutputError, PlantError
+
+    _coolprop_cache(coolprop_cache)
+    loaded = _load(plant_file)
+    try:
+        from dnasim.compiler import compile as compile_plant
+        from dnasim.design_point import design_point, format_design_point, write_design_point
+        from dnasim.steady_state import find_steady_state
+
+        system = compile_plant(loaded.plant)
+        t0 = loaded.simulation.t_start
+        rest = find_steady_state(system, t0)
+        dp = design_point(system, rest, t0)
+        click.echo(format_design_point(dp, units=units))
+        if out_dir is not None:
+            try:
+                files = write_design_point(dp, Path(out_dir), units=units)
+            except OSError as exc:
+                raise OutputError(f"cannot write the tables to {out_dir}: {exc}") from None
+            for f in files:
+                click.echo(f"wrote {f}")
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
+    except PlantError as exc:
+        raise InputError(f"{plant_file}: {exc}") from None
+    except DnasimError as exc:
+        raise InputError(f"{plant_file}: no state at rest found: {exc}") from None
+    except click.ClickException:
+        raise
+    except Exception as exc:
+        located = _located(exc, plant_file)
+        if located is not None:
+            raise InputError(located) from None
+        raise _internal(exc, EXIT_INPUT) from None
 
 
 # --------------------------------------------------------------------------- components

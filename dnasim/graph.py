@@ -46,6 +46,8 @@ class PlantGraph:
         self.components: dict[str, Component] = {}
         self.connections: dict[tuple[str, str], str] = {}  # (component, port) -> node
         self.links: dict[tuple[str, str], tuple[str, str]] = {}  # (comp, input) -> (comp, output)
+        #: guesses of node states for the start, node -> {"p": Pa, "h": J/kg or "T": K}
+        self.node_guesses: dict[str, dict[str, float]] = {}
         self._duplicates: list[str] = []
 
     # ------------------------------------------------------------ building
@@ -126,6 +128,48 @@ class PlantGraph:
         if (dst.name, inp) in self.links:
             raise PlantError(f"component '{dst.name}': signal input '{inp}' is already linked")
         self.links[(dst.name, inp)] = (sname, out)
+
+    def guess_node(self, node: str, p=None, T=None, h=None) -> None:
+        """Guesses of the state of ``node`` for the start: pressure ``p`` [Pa] and
+        temperature ``T`` [K] or specific enthalpy ``h`` [J/kg], numbers in SI or unit
+        strings ("100 bar", "500 degC", "3200 kJ/kg"). Only starting points of the
+        start's Newton iteration and the steady start's search, they win over every
+        guess the components make (``dnasim.initial_guess``); the state found is the
+        plant's. (A given start's component without initial values of its own takes its
+        initial state from its nodes, so there a node guess is also that state.) The
+        node must exist when the plant is compiled."""
+        from dnasim.units import UnitError, to_si
+
+        if not isinstance(node, str) or not node or "." in node:
+            raise PlantError(
+                f"plant '{self.name}': guess_node: node name must be a non-empty string "
+                f"without '.', got {node!r}"
+            )
+        if T is not None and h is not None:
+            raise PlantError(
+                f"plant '{self.name}': node '{node}': give T or h as the guess, not both"
+            )
+        out = {}
+        for key, value, unit in (("p", p, "Pa"), ("T", T, "K"), ("h", h, "J/kg")):
+            if value is None:
+                continue
+            try:
+                x = to_si(value, unit)
+            except (UnitError, TypeError, ValueError) as exc:
+                raise PlantError(
+                    f"plant '{self.name}': node '{node}': guess {key} = {value!r}: {exc}"
+                ) from None
+            if not (isinstance(x, float | int) and abs(x) < float("inf")) or (
+                key != "h" and not x > 0
+            ):
+                what = "finite" if key == "h" else "finite and > 0"
+                raise PlantError(
+                    f"plant '{self.name}': node '{node}': guess {key} = {value!r} must be {what}"
+                )
+            out[key] = float(x)
+        if not out:
+            raise PlantError(f"plant '{self.name}': node '{node}': a guess needs p, T or h")
+        self.node_guesses[node] = out
 
     # ------------------------------------------------------------- queries
     def node_names(self) -> list[str]:

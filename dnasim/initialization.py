@@ -36,20 +36,28 @@ RTOL = 1e-9
 H_SCALE = 1.0  # [s]
 
 
-def solve_mixed(dae, t0, y, yp, y_unknown, *, max_iter=60, what="initial state"):
+def iteration_matrix(dae) -> IterationMatrix:
+    """The finite-difference Jacobian of ``dae``'s residual on its sparsity (colouring
+    and band ordering made here: for a 10000-volume pipe this costs more than the
+    Newton iteration, so a caller with several solves makes it once)."""
+    pattern = sp.csc_matrix(dae.pattern_y + dae.pattern_yp)
+    return IterationMatrix(
+        dae.residual, len(dae.names), sparsity=pattern, names=dae.names, equation_names=dae.eq_names
+    )
+
+
+def solve_mixed(dae, t0, y, yp, y_unknown, *, max_iter=60, what="initial state", matrix=None):
     """Solve F(t0, y, y') = 0 for y[y_unknown] and y'[~y_unknown]. Returns (y, yp).
 
     ``dae`` needs ``residual``, ``nominal``, ``pattern_y``, ``pattern_yp``,
-    ``names`` and ``eq_names``. Raises PlantError naming variables and equations.
+    ``names`` and ``eq_names``; ``matrix``: its ``iteration_matrix`` when the caller
+    keeps one. Raises PlantError naming variables and equations.
     """
     y = np.array(y, dtype=float)
     yp = np.array(yp, dtype=float)
     y_unknown = np.asarray(y_unknown, dtype=bool)
-    n = y.size
-    pattern = sp.csc_matrix(dae.pattern_y + dae.pattern_yp)
-    matrix = IterationMatrix(
-        dae.residual, n, sparsity=pattern, names=dae.names, equation_names=dae.eq_names
-    )
+    if matrix is None:
+        matrix = iteration_matrix(dae)
     nominal = np.asarray(dae.nominal, dtype=float)
     try:
         return solve_consistent(

@@ -89,7 +89,9 @@ SIMULATION_KEYS = {
     "max_steps": "most accepted steps before the run stops (default 500000)",
 }
 
-_TOP_LEVEL = ("plant", "simulation", "components")
+_TOP_LEVEL = ("plant", "simulation", "components", "nodes")
+#: the keys of a ``[nodes.<name>]`` table (guesses for the start) and their SI units
+NODE_GUESS_KEYS = {"p": "Pa", "T": "K", "h": "J/kg"}
 
 
 # --------------------------------------------------------------------------- data
@@ -1084,8 +1086,8 @@ def parse_plant(
             errors.add(
                 (),
                 k,
-                f"unknown top-level key or table; expected [plant], [simulation] and "
-                f"[components.<name>]{suggest(k, _TOP_LEVEL)}",
+                f"unknown top-level key or table; expected [plant], [simulation], "
+                f"[components.<name>] and [nodes.<name>]{suggest(k, _TOP_LEVEL)}",
             )
     name = Path(str(path)).stem
     description = ""
@@ -1163,6 +1165,7 @@ def parse_plant(
                     "the number of volumes and sections in the plant", cells, LIMITS["cells"]
                 ),
             )
+    nodes = _node_guesses(data.get("nodes"), specs, comps, errors)
     errors.raise_if_any()
     return PlantSpec(
         path=str(path),
@@ -1173,7 +1176,66 @@ def parse_plant(
         medium=medium,
         imports=imports,
         atmosphere=atmosphere,
+        nodes=nodes,
     )
+
+
+def _node_guesses(data, specs, comps, errors: Problems) -> dict[str, dict[str, float]]:
+    """The ``[nodes.<name>]`` tables: guesses of a node's state for the start, ``p``
+    [Pa] and ``T`` [K] or ``h`` [J/kg] (numbers in SI or unit strings), in SI. The node
+    must be one the components' ports name."""
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        errors.add((), "nodes", f"expected tables [nodes.<name>], got {type_name(data)}")
+        return {}
+    known = {n for c in specs for n in c.ports.values()}
+    for table in (comps or {}).values():  # the nodes of components reported as invalid
+        ports = table.get("ports") if isinstance(table, dict) else None
+        if isinstance(ports, dict):
+            known.update(n for n in ports.values() if isinstance(n, str))
+    out = {}
+    for node, table in data.items():
+        where = ("nodes", node)
+        if node not in known:
+            errors.add(
+                where,
+                None,
+                f"unknown node '{node}': no component's ports name it"
+                + suggest(node, sorted(known)),
+            )
+            continue
+        if not isinstance(table, dict):
+            errors.add(where, None, f"expected a table with p and T or h, got {type_name(table)}")
+            continue
+        guess = {}
+        for key, v in table.items():
+            unit = NODE_GUESS_KEYS.get(key)
+            if unit is None:
+                errors.add(
+                    where,
+                    key,
+                    "unknown key; a node guess has p (pressure), T (temperature) or h (specific "
+                    f"enthalpy){suggest(key, tuple(NODE_GUESS_KEYS))}",
+                )
+                continue
+            x = quantity(v, unit, errors, where, key)
+            if x is None:
+                continue
+            if not math.isfinite(x) or (key != "h" and not x > 0):
+                errors.add(
+                    where, key, f"{v!r} must be {'finite' if key == 'h' else 'finite and > 0'}"
+                )
+                continue
+            guess[key] = x
+        if "T" in guess and "h" in guess:
+            errors.add(where, "h", "give T or h as the guess, not both")
+            continue
+        if not guess and not [k for k in table if k not in NODE_GUESS_KEYS]:
+            errors.add(where, None, 'empty node guess: give p = "... bar" and T = "... degC" or h')
+            continue
+        out[node] = guess
+    return out
 
 
 # --------------------------------------------------------------------------- building

@@ -145,6 +145,9 @@ class PlantSpec:
     #: the site's ambient pressure [Pa] (``[plant] atmosphere``): the zero of the gauge
     #: units ("5 barg", "70 psig") in the parameters and in sweep cases
     atmosphere: float = STANDARD_ATMOSPHERE
+    #: guesses of node states for the start, node -> {"p": ..., "T": ... or "h": ...}
+    #: (numbers in SI or unit strings; ``PlantGraph.guess_node``)
+    nodes: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def build(self):
         """The ``Plant`` (raises ``PlantError`` naming every problem)."""
@@ -187,6 +190,11 @@ def build_plant(spec: PlantSpec):
                 plant.link(src, f"{c.name}.{inp}")
             except PlantError as exc:
                 errors.add(("components", c.name, "inputs"), inp, str(exc))
+    for node, guess in spec.nodes.items():
+        try:
+            plant.guess_node(node, **guess)
+        except (PlantError, TypeError) as exc:
+            errors.add(("nodes", node), None, str(exc))
     errors.raise_if_any()
     # the plant's own copy of the settings (``Plant.simulate`` uses them): the plant
     # keeps no reference into the spec it was built from

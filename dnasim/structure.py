@@ -78,6 +78,7 @@ def analyse_graph(plant, report) -> None:
     """Checks 1-2, on the ``Plant`` alone (no system is built)."""
     _check_names(plant, report)
     _check_wiring(plant, report)
+    _check_node_guesses(plant, report)
 
 
 def analyse_system(plant, system, report) -> None:
@@ -100,6 +101,20 @@ def _check_names(plant, report):
         if node in plant.components:
             report.errors.append(
                 f"node '{node}' has the same name as a component; rename one of them"
+            )
+
+
+def _check_node_guesses(plant, report):
+    """A node guess (``PlantGraph.guess_node``) names a node of the plant."""
+    guesses = getattr(plant, "node_guesses", {}) or {}
+    nodes = plant.node_names()
+    for node in guesses:
+        if node not in nodes:
+            close = [n for n in nodes if n.lower() == node.lower()]
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            report.errors.append(
+                f"node guess for '{node}': the plant has no node of that name{hint} (its "
+                f"nodes: {', '.join(nodes)})"
             )
 
 

@@ -206,6 +206,12 @@ class System:
         self.connections = dict(plant.connections)  # (component, port) -> node
         self.links = dict(plant.links)  # (component, input) -> (component, output)
         self.node_media = dict(node_media or {})
+        #: the plant's guesses of node states for the start (``PlantGraph.guess_node``)
+        self.node_guesses = {
+            n: dict(g)
+            for n, g in getattr(plant, "node_guesses", {}).items()
+            if n in self.node_names
+        }
         self.port_media = dict(port_media or {})
         #: discrete modes, component name -> {key: value}; the components read and
         #: write them through ``LocalVector.modes`` (e.g. a controller's saturation)

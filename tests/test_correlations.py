@@ -10,8 +10,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dnasim.correlations import boiling, condensation, friction, heat_transfer, metals
-from dnasim.correlations import radiation, tube_banks
+from dnasim.correlations import (
+    boiling,
+    condensation,
+    friction,
+    heat_transfer,
+    metals,
+    radiation,
+    tube_banks,
+)
 
 # ------------------------------------------------------------------ friction
 
@@ -63,7 +70,9 @@ def test_pressure_drop_signed_smooth_through_zero():
     w = m / (rho * A)
     ref = float(friction.colebrook(Re, 4.5e-5 / D)) * L / D * rho * w * w / 2
     assert float(friction.pressure_drop(m, rho, mu, D, L, 4.5e-5)) == pytest.approx(ref, rel=1e-13)
-    assert float(friction.pressure_drop(-m, rho, mu, D, L, 4.5e-5)) == pytest.approx(-ref, rel=1e-13)
+    assert float(friction.pressure_drop(-m, rho, mu, D, L, 4.5e-5)) == pytest.approx(
+        -ref, rel=1e-13
+    )
 
 
 def test_friedel_worked_example():
@@ -85,7 +94,8 @@ def test_homogeneous_limits_void_and_static_head():
     args = (915.0, 2.67, 180e-6, 14e-6, 0.05, 2.0)
     m = 0.3
     assert friction.homogeneous_pressure_drop(m, 0.0, *args) == pytest.approx(
-        float(friction.pressure_drop(m, 915.0, 180e-6, 0.05, 2.0)), rel=1e-14)
+        float(friction.pressure_drop(m, 915.0, 180e-6, 0.05, 2.0)), rel=1e-14
+    )
     assert friction.homogeneous_pressure_drop(m, 1.0, *args) == pytest.approx(
         float(friction.pressure_drop(m, 2.67, 14e-6, 0.05, 2.0)), rel=1e-14)  # fmt: skip
     x = np.linspace(0.01, 0.99, 9)
@@ -102,9 +112,12 @@ def test_homogeneous_limits_void_and_static_head():
 
 def test_dittus_boelter_and_gnielinski_closed_forms():
     # the ht library's documentation (ht.conv_internal) for the same equations
-    assert heat_transfer.nusselt_dittus_boelter(1e5, 1.2) == pytest.approx(247.40036409449127, rel=1e-12)
+    assert heat_transfer.nusselt_dittus_boelter(1e5, 1.2) == pytest.approx(
+        247.40036409449127, rel=1e-12
+    )
     assert heat_transfer.nusselt_dittus_boelter(1e5, 1.2, heating=False) == pytest.approx(
-        242.9305927410295, rel=1e-12)
+        242.9305927410295, rel=1e-12
+    )
     assert heat_transfer.nusselt_gnielinski(1e5, 1.2, 0.0185) == pytest.approx(
         254.62682749359632, rel=1e-12)  # fmt: skip
     # Gnielinski and Dittus-Boelter agree to Dittus-Boelter's stated 25 % at Re 1e4..1e5
@@ -121,7 +134,9 @@ def test_nusselt_tube_vdi_blend():
     assert nu(1500.0, 5.0, boundary="q") == pytest.approx(4.364)
     # continuous at both ends of the VDI interpolation
     for Re0 in (2300.0, 1e4):
-        assert nu(Re0 * (1 - 1e-12), 3.0, 0.01) == pytest.approx(float(nu(Re0 * (1 + 1e-12), 3.0, 0.01)), rel=1e-9)
+        assert nu(Re0 * (1 - 1e-12), 3.0, 0.01) == pytest.approx(
+            float(nu(Re0 * (1 + 1e-12), 3.0, 0.01)), rel=1e-9
+        )
     # VDI G1 form at Re = 1e5, Pr = 3, fully developed (closed form written out)
     xi = (1.8 * np.log10(1e5) - 1.5) ** -2
     ref = xi / 8 * 1e5 * 3 / (1 + 12.7 * np.sqrt(xi / 8) * (3 ** (2 / 3) - 1))

@@ -510,23 +510,37 @@ def _attemperator_pi_file(tmp_dir) -> Path:
     return path
 
 
-def test_steady_start_without_a_steady_state_names_the_cause(tmp_path):
+def test_steady_start_beyond_a_limit_saturates_and_says_so(tmp_path):
     # 0.01 bar is inside IF97's range, but the turbine valve (m = C z sqrt(dp), no
     # choking) then passes 2.6 times its nominal flow, and the spray controller would
-    # need an opening above 1 to hold its set point: no steady state exists
+    # need an opening above 1 to hold its set point. Before issue 20 the steady start
+    # stopped there ("no steady state found"); a PI controller whose output at rest lies
+    # beyond its limit engages the limit (z = 1), and there the error keeps its sign
+    # (the steam stays too hot, the controller asks for more): a state at rest with the
+    # controller saturated, its held integral free. The start says both: the
+    # controller that holds its limit and the valve whose law ignores choking.
     import dnasim
-    from dnasim.errors import PlantError
-    from dnasim.start import initial_values
+    from dnasim.steady_state import find_steady_state
 
     spec = dnasim.load_plant(_attemperator_pi_file(tmp_path))
     spec.components["turbine"].params["p"] = 1000.0  # [Pa] = 0.01 bar
     system = dnasim.compile(spec)
-    with pytest.raises(PlantError) as info:
-        initial_values(system, 0.0, "steady")
-    msg = str(info.value)
-    assert msg.index("component 'pi' (PIController)") < msg.index("The solver's report")
-    for words in ("'free' -> 'high'", "pi.z = 1.07", "'turbine_valve'", "choked"):
-        assert words in msg, (words, msg)
+    rest = find_steady_state(system, 0.0)
+    at = system.index
+    assert rest.saturated == [("pi", "high")]
+    assert rest.y[at["pi.z"]] == 1.0  # the output equation in mode "high": z = z_max exactly
+    assert rest.y[at["pi.e"]] > 0.0  # measured above the set point: it would open further
+    notes = " ".join(rest.notes)
+    for words in ("controller 'pi' holds its output at z_max = 1", "'turbine_valve'", "choked"):
+        assert words in notes, (words, notes)
+    # at rest: y' = 0 except the accumulators' (the boundaries' running integrals)
+    moving = [
+        n
+        for n, v, acc in zip(system.names, rest.yp, system.accumulator, strict=True)
+        if v and not acc
+    ]
+    assert not moving, moving
+    assert rest.yp[at["pi.m_I"]] == 0.0  # held (anti_windup): the integral does not wind
 
 
 # --------------------------------------------------------------------------- 10. early signals

@@ -34,7 +34,7 @@ STAGES: list[tuple[str, list[str]]] = [
     ("system", ["dnasim.system", "dnasim.structure", "dnasim.limits"]),
     ("compiler", ["dnasim.compiler"]),
     ("solver", ["dnasim.solver", "dnasim.initialization", "dnasim.initial_guess"]),
-    ("start", ["dnasim.start"]),
+    ("start", ["dnasim.start", "dnasim.steady_state"]),
     ("results", ["dnasim.results", "dnasim.output", "dnasim.sinks"]),
     ("backends", ["dnasim.backends"]),
     ("simulation", ["dnasim.simulation"]),
@@ -42,7 +42,16 @@ STAGES: list[tuple[str, list[str]]] = [
     ("spec", ["dnasim.spec"]),
     ("plant files", ["dnasim.plantfile", "dnasim.examples"]),
     ("cases", ["dnasim.cases"]),
-    ("runner", ["dnasim.runner", "dnasim.plots", "dnasim.linearize", "dnasim.testing"]),
+    (
+        "runner",
+        [
+            "dnasim.runner",
+            "dnasim.plots",
+            "dnasim.linearize",
+            "dnasim.testing",
+            "dnasim.design_point",
+        ],
+    ),
     ("tools", ["dnasim.sweeps", "dnasim.report", "dnasim.reference"]),
     ("command line", ["dnasim.cli", "dnasim.entry", "dnasim.__main__", "dnasim"]),
 ]

@@ -77,7 +77,7 @@ R1_76_TABLE_1 = [
 
 
 def test_viscosity_r12_08_table_4():
-    T, rho, ref = map(np.array, zip(*R12_08_TABLE_4))
+    T, rho, ref = map(np.array, zip(*R12_08_TABLE_4, strict=False))
     mu = WT.viscosity(T, rho) * 1e6
     # the table prints six decimals: agree to half a unit of the last one
     np.testing.assert_allclose(mu, ref, rtol=0, atol=0.5e-6)
@@ -112,7 +112,7 @@ def test_conductivity_industrial_region_3(T, rho, ref, digits):
 
 
 def test_surface_tension_r1_76_table_1():
-    T, ref = map(np.array, zip(*R1_76_TABLE_1))
+    T, ref = map(np.array, zip(*R1_76_TABLE_1, strict=False))
     sigma = WT.surface_tension(T) * 1e3
     # the table prints two decimals
     np.testing.assert_allclose(sigma, ref, rtol=0, atol=0.005)
@@ -136,7 +136,7 @@ def test_water_transport_against_coolprop_heos():
     w = get_medium("Water")
     pts = [(p, T) for p, T in _water_grid() if abs(T - NB._tsat(min(p, 22e6))) > 1.0]
     p = np.array([a for a, _ in pts])
-    T = np.array([b for _, b in pts])
+    np.array([b for _, b in pts])
     h = np.array([w.h_pT(a, b) for a, b in pts])
     t = w.transport(p, h)
     mu_ref = np.array([CP.PropsSI("V", "T", b, "P", a, "Water") for a, b in pts])
@@ -348,7 +348,7 @@ def test_coolprop_medium_transport_is_coolprops():
     h = np.array([2.0e5, 4.4e5, 4.6e5])
     t = r.transport(p, h)
     for key, out in (("mu", "V"), ("k", "L"), ("cp", "C")):
-        ref = [CP.PropsSI(out, "P", a, "H", b, "R134a") for a, b in zip(p, h)]
+        ref = [CP.PropsSI(out, "P", a, "H", b, "R134a") for a, b in zip(p, h, strict=False)]
         # the same library, the same state: equal to round-off of the flash
         np.testing.assert_allclose(t[key], ref, rtol=1e-9, err_msg=key)
     with pytest.raises(PropertyError, match="two-phase dome"):

@@ -64,7 +64,9 @@ def assert_physical(r: dict[str, np.ndarray], vessels: dict[str, tuple[float, fl
 
 def stop_time(output: str) -> float:
     """The located time in the message ("... at t = 125.591 s ...")."""
-    m = re.search(r"at t = ([0-9.e+-]+) s \(", output) or re.search(r"at t = ([0-9.e+-]+) s", output)
+    m = re.search(r"at t = ([0-9.e+-]+) s \(", output) or re.search(
+        r"at t = ([0-9.e+-]+) s", output
+    )
     assert m, output
     return float(m.group(1))
 

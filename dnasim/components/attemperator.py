@@ -175,6 +175,9 @@ class Attemperator(Component):
             T - T_st[1],
         ]
 
+    def design_values(self, t0, x):
+        return {"m": x["m_out"]}
+
     def guess_nodes(self, t0):
         P = self.params
         if P["p0"] is not None and P["T0"] is not None:

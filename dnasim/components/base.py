@@ -950,6 +950,38 @@ class Component:
         in x are the upstream components' guesses). Not called for a given start, whose
         initial state ``initial_guess`` defines. Default: nothing."""
 
+    def free_at_rest(self, t0: float, x: LocalVector) -> tuple[str, ...]:
+        """Hook for the steady start: the differential variables (local names) that a
+        state at rest leaves undetermined in the current discrete mode, because no
+        equation reads them there: the held integral of a PI controller saturated at a
+        limit (its output is the limit, whatever the integral). The steady start keeps
+        their values and solves their derivatives instead, as for accumulators
+        (``dnasim.steady_state``). Default: none."""
+        return ()
+
+    def steady_problems(self, t0: float, x: LocalVector) -> list[str]:
+        """Hook for the steady start: why the state at rest x lies outside this
+        component's stated range, one sentence each in plant terms (a sink-only boundary
+        that would feed the plant, a check valve passing reverse flow, a vessel level
+        outside the vessel); the steady start then stops with them
+        (``dnasim.steady_state``). Default: none."""
+        return []
+
+    def design_values(self, t0: float, x: LocalVector) -> dict[str, float]:
+        """Hook for the design-point table (``dnasim steady``): what an engineer checks
+        first at a state x, by key (each only where the component has it):
+
+          m           mass flow through the component [kg/s]
+          duty        heat into the component's fluid [W] (< 0: heat out of it)
+          heat_in     the part of duty that is heat from outside the plant's working
+                      fluid (a furnace, a fixed wall, flue gas) [W]
+          power       shaft power into the fluid [W] (a pump > 0, a turbine < 0)
+          opening     a valve's opening z, a controller's output z [-]
+          efficiency  a machine's efficiency [-]
+
+        Default: ``m`` when the component has a variable of that name."""
+        return {"m": x["m"]} if "m" in x.index and not isinstance(x.index["m"], slice) else {}
+
     def reset_discrete_state(self, modes: dict) -> None:
         """Hook: put the discrete modes back to their default before a simulation.
 

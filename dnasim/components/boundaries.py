@@ -336,6 +336,23 @@ class _Boundary(Component):
             doc="T(t) - T_sat(p) [K]: the given supply T reaches saturation",
         )
 
+    def steady_problems(self, t0, x):
+        """A sink-only boundary through which fluid enters the plant at rest (more than
+        the reverse_inflow switch's tolerance): no state of that fluid is given, and a
+        run would stop at once (``Component.steady_problems``)."""
+        if self.has_supply:
+            return []
+        m, tol = x["m"], REVERSE_INFLOW_TOL * self.params["m_nominal"]
+        if m <= tol:
+            return []
+        return [
+            f"boundary '{self.name}' ({type(self).__name__}) is a sink only, but at rest "
+            f"{m:.4g} kg/s would enter the plant through it (node pressure "
+            f"{x['port.p'] / 1e5:.6g} bar): a sink gives no state for fluid entering the plant. "
+            "Check its pressure or flow against the plant's (a sink above the pressure "
+            "upstream feeds the plant), or give T or h if fluid may enter there"
+        ]
+
     def initial_guess(self, t0, x):
         x["M_passed"] = 0.0
         x["H_passed"] = 0.0

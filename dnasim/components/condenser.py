@@ -488,6 +488,10 @@ class Condenser(Component):
         return [(x["h_v"] - hl) / (hv - hl), x["M"], x["U"]]
 
     # ---------------------------------------------------------- initialisation
+    def design_values(self, t0, x):
+        """The steam flow condensed and the heat removed from it (duty -Q) [W]."""
+        return {"m": x["m_s"], "duty": -x["Q"]}
+
     def guess_nodes(self, t0):
         p0 = self.params["p0"]
         if p0 is None:

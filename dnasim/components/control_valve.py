@@ -16,7 +16,14 @@ from dnasim.components.base import (
     Variable,
     flow_through_ports,
 )
-from dnasim.components.physics import fixed_value, opening_band, softplus, upwind_mean, valve_flow
+from dnasim.components.physics import (
+    M_EPS_REL,
+    fixed_value,
+    opening_band,
+    softplus,
+    upwind_mean,
+    valve_flow,
+)
 from dnasim.components.valve_laws import (
     EXPONENT_MODELS,
     critical_pressure_ratio,
@@ -507,6 +514,9 @@ class ControlValve(Component):
             dp_e = x_e * p1
         return Y * math.sqrt(rho1) * valve_flow(1.0, 1.0, dp_e, reg)
 
+    def design_values(self, t0, x):
+        return {"m": x["m"], "opening": self.opening(t0, x)}
+
     def initial_guess(self, t0, x):
         try:
             x["m"] = self.flow(t0, x) if not self.opening_from_signal else 0.0
@@ -570,3 +580,29 @@ class CheckValve(ControlValve):
         if x["inlet.p"] - x["outlet.p"] < dp_half:
             x["outlet.p"] = x["inlet.p"] - dp_half
         x["m"] = self.flow(t0, x)
+
+    #: reverse flow through the closed valve beyond this multiple of its leakage flow at
+    #: the reverse pressure difference is outside its range (``steady_problems``)
+    REVERSE_LEAK_FACTOR = 10.0
+
+    def steady_problems(self, t0, x):
+        """Reverse flow (m < 0) above REVERSE_LEAK_FACTOR times the leakage flow at rest
+        (``Component.steady_problems``); the valve's law gives at most its leakage, so
+        this flags a state the solver found outside the model's range."""
+        m = x["m"]
+        if m >= -M_EPS_REL * self.params["m_nominal"]:
+            return []
+        try:
+            leak = (
+                self.params["leakage"]
+                * self.K
+                * abs(self.iec_factor(x, x["inlet.p"] - x["outlet.p"]))
+            )
+        except Exception:  # noqa: BLE001 - a range check must not hide the state
+            leak = 0.0
+        if abs(m) <= self.REVERSE_LEAK_FACTOR * leak:
+            return []
+        return [
+            f"check valve '{self.name}' passes {-m:.4g} kg/s in reverse at rest, more than its "
+            "leakage"
+        ]

@@ -43,6 +43,20 @@ def check_set_point_unit(comp) -> None:
         )
 
 
+def output_range_problems(comp, x) -> list[str]:
+    """A controller's output z outside [z_min, z_max] at a state at rest (the steady
+    start engages a limit instead; ``Component.steady_problems``)."""
+    P = comp.params
+    z, lo, hi = x["z"], P["z_min"], P["z_max"]
+    tol = MODE_ROUNDOFF * max(abs(hi - lo), abs(hi), abs(lo))
+    if lo - tol <= z <= hi + tol:
+        return []
+    return [
+        f"controller '{comp.name}' ({type(comp).__name__}) has the output z = {z:.4g}, "
+        f"outside its range [{lo:g}, {hi:g}]"
+    ]
+
+
 class PIController(Component):
     """PI controller with an output limited to [z_min, z_max] by switch variables.
 
@@ -311,3 +325,16 @@ class PIController(Component):
         x["e"] = 0.0
         x["m_p"] = 0.0
         x["z"] = min(max(self.params["integral0"], self.params["z_min"]), self.params["z_max"])
+
+    def free_at_rest(self, t0, x):
+        """Saturated (mode "high" or "low"), the output is the limit and no equation
+        reads the integral m_I: the steady start keeps it (``Component.free_at_rest``).
+        With anti_windup it is held (dm_I/dt = 0, the state is at rest); without, it
+        winds at dm_I/dt = KI e."""
+        return ("m_I",) if self._mode(x) != "free" else ()
+
+    def design_values(self, t0, x):
+        return {"opening": x["z"]}
+
+    def steady_problems(self, t0, x):
+        return output_range_problems(self, x)

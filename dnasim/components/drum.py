@@ -504,6 +504,28 @@ class _SaturatedVessel(Component):
         V_l = P["V_l0"] if P["V_l0"] is not None else P["V_t"] / 2
         return p, V_l
 
+    def steady_problems(self, t0, x):
+        """A liquid volume outside (0, V_t) at rest (``Component.steady_problems``)."""
+        V_l, V_t = x["V_l"], self.params["V_t"]
+        if 0.0 < V_l < V_t:
+            return []
+        return [
+            f"{type(self).__name__.lower()} '{self.name}' would hold V_l = {V_l:.4g} m3 of "
+            f"liquid at rest, outside the vessel's volume 0 .. {V_t:g} m3"
+        ]
+
+    def design_values(self, t0, x):
+        """The heat input Q [W] (heat from outside: a furnace, when positive) and the
+        flow of the first outlet (the steam of a drum, the feed water of a tank)."""
+        Q = self.heat(t0, x)
+        out = {"duty": Q}
+        if Q > 0.0:
+            out["heat_in"] = Q
+        first_out = next((n for n, role, _, _ in self.PORTS if role == "outlet"), None)
+        if first_out is not None:
+            out["m"] = x[f"m_{first_out}"]
+        return out
+
     def guess_nodes(self, t0):
         if self.params["p0"] is None:
             return {}

@@ -305,6 +305,17 @@ class HeatExchanger(Component):
         _, _, Tc, _, _ = self.channels["cold"].evaluate(self.side_medium("cold"), x)
         return [Th[-2], Tc[-2], float(np.sum(x["hot_Q"]))]
 
+    def design_values(self, t0, x):
+        """The cold side's flow and the heat into it, -sum(cold_Q) [W] (at rest the heat
+        the hot side gives); heat from outside the working fluid when the two sides
+        carry different fluids (flue gas to water: an economiser, a superheater)."""
+        duty = -float(np.sum(x["cold_Q"]))
+        out = {"m": float(x["cold_m"][0]), "duty": duty}
+        hot, cold = self.side_medium("hot"), self.side_medium("cold")
+        if hot is not None and cold is not None and hot.label != cold.label and duty > 0.0:
+            out["heat_in"] = duty
+        return out
+
     def initial_guess(self, t0, x):
         n = self.n
         frac = (np.arange(n) + 1.0) / n

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from dnasim.components.base import Component, Equation, Output, Param, SignalPort, Switch, Variable
-from dnasim.components.controller import check_set_point_unit
+from dnasim.components.controller import check_set_point_unit, output_range_problems
 from dnasim.errors import PlantError
 
 __all__ = ["PIDController"]
@@ -396,3 +396,20 @@ class PIDController(Component):
             x["x_f"] = self._e_d(x["measured"], self.set_point_value(t0, x))
             x["m_D"] = 0.0
         x["z"] = min(max(P["integral0"], P["z_min"]), P["z_max"])
+
+    def free_at_rest(self, t0, x):
+        """Saturated without back-calculation (anti_windup = false), the output is the
+        limit and no equation reads the integral m_I: the steady start keeps it and
+        solves its rate dm_I/dt = Kp/T_i e (``Component.free_at_rest``). With
+        anti_windup the back-calculation term reads the demand v, so m_I is determined
+        (at rest v - z_lim = T_t Kp e / T_i); without an I part m_I is an accumulator."""
+        P = self.params
+        if self._mode(x) == "free" or P["T_i"] is None or P["anti_windup"]:
+            return ()
+        return ("m_I",) if self._automatic(t0) else ()
+
+    def design_values(self, t0, x):
+        return {"opening": x["z"]}
+
+    def steady_problems(self, t0, x):
+        return output_range_problems(self, x)

@@ -409,6 +409,17 @@ class Pipe(Component):
             *T[1:-1],
         ]
 
+    def design_values(self, t0, x):
+        """Flow at the inlet, heat into the fluid -sum(Q) [W] (Q: fluid to wall); heat
+        from outside the plant when the wall is prescribed or heated from outside."""
+        duty = -float(np.sum(x["Q"]))
+        out = {"m": float(x["m"][0]), "duty": duty}
+        outside = self.fixed_wall or self.params.get("Q_outer") is not None
+        outside = outside or self.params.get("T_outer") is not None
+        if outside and duty > 0.0:
+            out["heat_in"] = duty
+        return out
+
     def guess_nodes(self, t0):
         P = self.params
         if P["T0"] is None:

@@ -715,6 +715,16 @@ class Pump(Component):
         dp = float(softplus(x["outlet.p"] - x["inlet.p"], self.params["dp_reg"]))
         return x["h_2"] - x["inlet.h"] - dp / (rho * eta)
 
+    def design_values(self, t0, x):
+        """Shaft power into the fluid P [W] and the efficiency at the operating point."""
+        out = {"m": x["m"], "power": x["P"]}
+        try:
+            rho = self.density(x)
+            out["efficiency"] = self.efficiency(x["m"] / rho, self.speed(t0, x))
+        except Exception:  # noqa: BLE001 - a table value, not a residual
+            pass
+        return out
+
     def guess_nodes(self, t0):
         """Discharge pressure guess [Pa]: 1 bar plus the head at m_nominal with cold water
         (1000 kg/m3), so that the nodes downstream are not guessed at the suction

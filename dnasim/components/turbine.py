@@ -195,6 +195,10 @@ class SteamTurbine(Component):
         h_s = h_isentropic(self.medium, x["inlet.p"], h1, x["outlet.p"])
         return h1 - self.params["eta"] * (h1 - h_s)
 
+    def design_values(self, t0, x):
+        """Shaft power into the fluid (minus the power delivered, P) [W], eta [-]."""
+        return {"m": x["m"], "power": -x["P"], "efficiency": self.params["eta"]}
+
     def guess_nodes(self, t0):
         P = self.params
         out = {}

@@ -148,6 +148,10 @@ class Valve(Component):
         rho1 = float(upwind_mean(p_in - p_out, rho_in, rho_out, self.params["dp_reg"]))
         return (rho1 / self.params["rho_nominal"]) ** 0.5
 
+    def design_values(self, t0, x):
+        z = x["z"] if self.opening_from_signal else self.param_at("opening", t0)
+        return {"m": x["m"], "opening": z}
+
     def initial_guess(self, t0, x):
         dp = x["inlet.p"] - x["outlet.p"]
         z = self.opening(t0, x) if not self.opening_from_signal else 0.5

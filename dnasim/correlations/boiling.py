@@ -73,7 +73,9 @@ def chen_boiling(G, x, D, rho_l, rho_v, mu_l, mu_v, k_l, cp_l, h_lv, sigma, dT_s
             xtt = lockhart_martinelli_xtt(np.maximum(xq, 1e-300), rho_l, rho_v, mu_l, mu_v)
         F = np.where(xq > 0.0, (1.0 + xtt**-0.5) ** 1.78, 1.0)
         S = 0.9622 - 0.5822 * np.arctan(Re_l * F**1.25 / 6.18e4)
-        return F * h_l + S * forster_zuber(dT_sat, dp_sat, rho_l, rho_v, mu_l, k_l, cp_l, h_lv, sigma)
+        return F * h_l + S * forster_zuber(
+            dT_sat, dp_sat, rho_l, rho_v, mu_l, k_l, cp_l, h_lv, sigma
+        )
 
     h_wet = wet(np.minimum(x, xc))
     if k_v is None or cp_v is None:

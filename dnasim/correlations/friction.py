@@ -92,8 +92,12 @@ def pressure_drop(m, rho, mu, D, L, roughness=0.0):
     m = np.asarray(m, dtype=float)
     A = np.pi * np.asarray(D, dtype=float) ** 2 / 4.0
     Re = np.abs(m) * D / (A * mu)
-    return darcy_friction_Re(Re, roughness / np.asarray(D, dtype=float)) * mu * L * m / (
-        2.0 * rho * A * D * D
+    return (
+        darcy_friction_Re(Re, roughness / np.asarray(D, dtype=float))
+        * mu
+        * L
+        * m
+        / (2.0 * rho * A * D * D)
     )
 
 

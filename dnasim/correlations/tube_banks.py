@@ -71,7 +71,7 @@ def nusselt_zukauskas(Re_max, Pr, n_rows, S_T, S_L, staggered, Pr_wall=None):
         vals.append(_branch(Re, Pr, C, m))
     nu = vals[0]
     lnRe = np.log(Re)
-    for (Re_b, _, _), v in zip(rows[1:], vals[1:]):
+    for (Re_b, _, _), v in zip(rows[1:], vals[1:], strict=True):
         t = np.clip((lnRe - np.log(Re_b) + _BLEND) / (2.0 * _BLEND), 0.0, 1.0)
         w = t * t * (3.0 - 2.0 * t)
         nu = (1.0 - w) * nu + w * v

@@ -414,9 +414,7 @@ def transport_result(label, p, h, mu, k, cp, bad, reasons, check: bool) -> dict:
     if bad.any():
         if check:
             i = int(np.flatnonzero(bad)[0])
-            raise PropertyError(
-                label, float(p.flat[i]), float(h.flat[i]), "transport", reasons(i)
-            )
+            raise PropertyError(label, float(p.flat[i]), float(h.flat[i]), "transport", reasons(i))
         mu = np.where(bad, np.nan, mu)
         k = np.where(bad, np.nan, k)
         cp = np.where(bad, np.nan, cp)

@@ -180,7 +180,9 @@ class MixtureTransport:
         for i in range(n):
             D = 0.0
             for j in range(n):
-                phi = (1.0 + math.sqrt(mus[i] / mus[j]) * self._m14_l[i][j]) ** 2 * self._den_l[i][j]
+                phi = (1.0 + math.sqrt(mus[i] / mus[j]) * self._m14_l[i][j]) ** 2 * self._den_l[i][
+                    j
+                ]
                 D += x[j] * phi
             mu += x[i] * mus[i] / D
             k += x[i] * ks[i] / D

@@ -220,7 +220,10 @@ class IF97Water(Medium):
             TL, rL, rV, hl, hv, muL, muV, kL, kV, cL, cV,
             muL * cL / kL, muV * cV / kV, WT.surface_tension(TL),
         )  # fmt: skip
-        return {key: v.reshape(p.shape) for key, v in zip(SATURATION_TRANSPORT_KEYS, values)}
+        return {
+            key: v.reshape(p.shape)
+            for key, v in zip(SATURATION_TRANSPORT_KEYS, values, strict=True)
+        }
 
     def _saturated_sides(self, p):
         """((T, rho, cp, (d rho/d p)_h, (d rho/d h)_p) of the saturated liquid, the same
