@@ -509,9 +509,12 @@ def _switch_block(block) -> bool:
     """A block whose modes follow its scalar switch functions with actions (controllers,
     limiters); the other blocks' modes (phases, table segments) follow the state
     (``init_discrete_state``)."""
-    return any(
-        sw.action is not None and getattr(sw, "size", 1) == 1 for sw in block.comp.switches()
-    )
+    return any(_mode_switch(sw) for sw in block.comp.switches())
+
+
+def _mode_switch(sw) -> bool:
+    """A scalar switch whose action changes the component's equations (not a notice)."""
+    return sw.action is not None and sw.size == 1 and not sw.notice
 
 
 def state_modes(system, t0, y, yp) -> bool:
@@ -533,7 +536,7 @@ def switch_modes(system, t0, y, yp) -> list[ModeChange]:
             continue
         x, xp = b.local(y), b.local(yp)
         for sw in b.comp.switches():
-            if sw.action is None or getattr(sw, "size", 1) != 1:
+            if not _mode_switch(sw):
                 continue
             try:
                 g = float(sw.function(t0, x, xp))
@@ -805,7 +808,7 @@ def limit_problems(system, t0, y, yp) -> list[str]:
             continue
         x, xp = b.local(y), b.local(yp)
         for sw in b.comp.switches():
-            if sw.action is None or getattr(sw, "size", 1) != 1:
+            if not _mode_switch(sw):
                 continue
             try:
                 g = float(sw.function(t0, x, xp))

@@ -305,8 +305,10 @@ PRV_GUESS = '\n[nodes.n_lp]\np = "12 bar"\nT = "300 degC"\n'
 
 
 def test_node_guess_of_the_plant_file_is_the_start_of_the_search():
-    # without guesses the PRV station needs the march (stage 1c); with the LP header
-    # guessed at 12 bar the first guess already converges, to the same state
+    # with the LP header guessed at 12 bar the first guess converges, to the same state
+    # as the search without guesses (which, since the half-open check-valve guess of
+    # the pumps branch, may converge from its first guess too; on the steady branch
+    # alone it needed the march, stage 1c)
     text = (PLANTS / "steady_prv_station.toml").read_text()
     plain = loads(text, "prv.toml").plant.compile()
     guessed_spec = loads(text + PRV_GUESS, "prv.toml")
@@ -314,7 +316,7 @@ def test_node_guess_of_the_plant_file_is_the_start_of_the_search():
     assert guessed_spec.spec.nodes == {"n_lp": {"p": 12e5, "T": 573.15}}
     assert guessed.node_guesses == {"n_lp": {"p": 12e5, "T": 573.15}}
     a, b = find_steady_state(plain, 0.0), find_steady_state(guessed, 0.0)
-    assert a.stats.method == "newton (march)" and b.stats.method == "newton (guess)"
+    assert a.stats.method.startswith("newton") and b.stats.method == "newton (guess)"
     np.testing.assert_allclose(b.y, a.y, rtol=1e-8, atol=1e-8 * plain.nominal.max())
 
 

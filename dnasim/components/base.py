@@ -424,7 +424,10 @@ class Switch:
     and cuts a failed step at the predicted crossing (``dnasim.solver``). rearm: the
     action makes g positive again (a mode toggle whose new mode has its own g), so an
     entry found past zero after a restart and moving further has crossed again
-    (``dnasim.solver.events.SwitchFunction.missed``).
+    (``dnasim.solver.events.SwitchFunction.missed``). notice: the action only records a
+    notice (a warning in the component's modes) and changes no equation, so the steady
+    start does not treat it as a mode to balance; ``init_discrete_state`` reports the
+    state at the start instead (a pump's cavitation warning).
     """
 
     name: str
@@ -439,6 +442,7 @@ class Switch:
     message: Callable | None = None
     kink: bool = False
     rearm: bool = False
+    notice: bool = False
 
 
 @dataclass(frozen=True)

@@ -624,6 +624,7 @@ class Pump(Component):
                 direction=-1,
                 action=None if stop else warn,
                 terminal=stop,
+                notice=not stop,
                 message=message if stop else None,
                 doc="NPSH_a - NPSH_r [m] (+ margin for reverse flow): falls through 0 (with "
                 'cavitation = "warn": its negative while the pump cavitates, the recovery)',
