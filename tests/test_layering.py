@@ -42,7 +42,10 @@ STAGES: list[tuple[str, list[str]]] = [
     ("spec", ["dnasim.spec"]),
     ("plant files", ["dnasim.plantfile", "dnasim.examples"]),
     ("cases", ["dnasim.cases"]),
-    ("runner", ["dnasim.runner", "dnasim.plots", "dnasim.linearize", "dnasim.testing"]),
+    (
+        "runner",
+        ["dnasim.runner", "dnasim.plantinfo", "dnasim.plots", "dnasim.linearize", "dnasim.testing"],
+    ),
     ("tools", ["dnasim.sweeps", "dnasim.report", "dnasim.reference"]),
     ("command line", ["dnasim.cli", "dnasim.entry", "dnasim.__main__", "dnasim"]),
 ]
