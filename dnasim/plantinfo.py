@@ -15,7 +15,7 @@ The description is plain JSON data (:func:`describe_plant`)::
                      "ports": [{"port": "inlet", "node": "n_hotwell", "role": "inlet"}, ...],
                      "inputs": [{"input": "z", "source": "level_pi.z", "column": "level_pi.z"}],
                      "supply": null}, ...],
-     "nodes": ["n_hotwell", ...],
+     "nodes": ["n_hotwell", ...], "media": {"n_hotwell": "Water", "g_in": "FlueGas", ...},
      "links": [{"source": "level_pi.z", "target": "feed_valve.z", "column": "level_pi.z"}],
      "controllers": [{"name": "level_pi", "measured": "drum.level",
                       "setpoint": "level_pi.setpoint", "output": "level_pi.z",
@@ -66,12 +66,16 @@ def _column(plant, owner: str, ref: str, names) -> str | None:
     return col
 
 
-def describe_plant(plant, names=None, *, description: str = "", file=None) -> dict:
+def describe_plant(
+    plant, names=None, *, description: str = "", file=None, media: dict | None = None
+) -> dict:
     """The JSON description of ``plant`` (a ``PlantGraph``; see the module docstring).
 
     ``names``: the results columns (``System.output_names()``); a signal whose
     column is not among them gets ``column`` null. ``description`` and ``file``:
-    the plant file's ``[plant] description`` and path."""
+    the plant file's ``[plant] description`` and path. ``media``: node -> medium
+    (a name or an object with ``name``; ``System.node_media``), written as
+    ``"media": {node: name}``."""
     names = None if names is None else set(names)
     comps = []
     for name, comp in plant.components.items():
@@ -128,15 +132,21 @@ def describe_plant(plant, names=None, *, description: str = "", file=None) -> di
         "file": None if file is None else str(file),
         "components": comps,
         "nodes": list(plant.node_names()),
+        "media": {
+            str(n): str(getattr(m, "name", m)) for n, m in (media or {}).items() if m is not None
+        },
         "links": links,
         "controllers": controllers,
     }
 
 
-def describe_loaded(loaded, names=None) -> dict:
+def describe_loaded(loaded, system=None) -> dict:
     """:func:`describe_plant` of a ``LoadedPlant`` (or a plant), with the plant
-    file's description and path."""
+    file's description and path; ``system``: the compiled plant (its output names
+    and node media), or None."""
     plant = getattr(loaded, "plant", loaded)
+    names = None if system is None else system.output_names()
+    media = None if system is None else getattr(system, "node_media", None)
     spec = getattr(loaded, "spec", None)
     description = getattr(spec, "description", "") or ""
     return describe_plant(
@@ -144,6 +154,7 @@ def describe_loaded(loaded, names=None) -> dict:
         names,
         description=description if isinstance(description, str) else "",
         file=getattr(loaded, "path", None),
+        media=media,
     )
 
 

@@ -254,7 +254,7 @@ def run_plant(
     sim = loaded.simulation
     if system is None:
         system = compile_plant(loaded.plant)
-    write_plant_json(out, describe_loaded(loaded, system.output_names()))
+    write_plant_json(out, describe_loaded(loaded, system))
     t_start = time.perf_counter()
 
     state: dict[str, Any] = {

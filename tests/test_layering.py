@@ -46,7 +46,7 @@ STAGES: list[tuple[str, list[str]]] = [
         "runner",
         ["dnasim.runner", "dnasim.plantinfo", "dnasim.plots", "dnasim.linearize", "dnasim.testing"],
     ),
-    ("tools", ["dnasim.sweeps", "dnasim.report", "dnasim.reference"]),
+    ("tools", ["dnasim.sweeps", "dnasim.schematic", "dnasim.report", "dnasim.reference"]),
     ("command line", ["dnasim.cli", "dnasim.entry", "dnasim.__main__", "dnasim"]),
 ]
 
