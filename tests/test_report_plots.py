@@ -26,15 +26,7 @@ from click.testing import CliRunner
 
 from dnasim.cli import main
 from dnasim.output import read_results_csv
-from dnasim.plots import (
-    default_selection,
-    display,
-    is_constant,
-    merge_identical,
-    panels_for,
-    quantity_of,
-    select_panels,
-)
+from dnasim.plots import default_selection, display, merge_identical, quantity_of
 
 PLANTS = Path(__file__).parents[1] / "plants"
 
@@ -351,6 +343,7 @@ def test_run_plot_and_plot_command_write_the_same_files(run_dir):
 
 def panels_of(out: Path):
     from dnasim.plantinfo import read_plant_json
+    from dnasim.plots import select_panels
 
     names, units, data = read_results_csv(out / "results.csv")
     plant = read_plant_json(out)
@@ -360,6 +353,8 @@ def panels_of(out: Path):
 
 
 def assert_one_unit_per_axis(panels, units, data):
+    from dnasim.plots import is_constant
+
     for p in panels:
         assert {units[n] for n in p.names} == {p.unit}, (p.quantity, p.names)
         for c in p.curves:
@@ -443,6 +438,8 @@ def test_evaporator_selection(runs):
 def test_no_two_units_share_an_axis():
     """Set points and errors of controllers that measure different quantities
     (main put 'set point [m]' over a bar and a metre set point)."""
+    from dnasim.plots import select_panels
+
     names = [
         "lc.e", "lc.z", "lc.m_I", "lc.setpoint", "pc.e", "pc.z", "pc.m_I", "pc.setpoint",
         "drum.level", "drum.p",
@@ -484,6 +481,8 @@ def test_no_two_units_share_an_axis():
 
 
 def test_vars_still_choose_and_engineering_units_still_convert(runs, tmp_path):
+    from dnasim.plots import panels_for
+
     out = runs("drum_boiler")
     names, units, data = read_results_csv(out / "results.csv")
     panels = panels_for(["drum.p", "drum.level", "n_sink.p"], units, data)
@@ -609,6 +608,8 @@ def test_flat_curves_do_not_magnify_round_off():
 
 
 def test_constants():
+    from dnasim.plots import is_constant
+
     # 1e-5 of the magnitude: 1 mbar of 100 bar is constant, 10 mbar is not
     assert is_constant(1e7 + np.array([0.0, 90.0]), 0.0, "Pa")
     assert not is_constant(1e7 + np.array([0.0, 1000.0]), 0.0, "Pa")
