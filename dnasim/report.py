@@ -165,6 +165,7 @@ def report_data(results_csv, plant: dict | None, *, units: str = "si") -> dict:
     constants, events, restarts and steps. ``plant``: the description of
     :mod:`dnasim.plantinfo` (None: the groups follow the names)."""
     from dnasim.plots import (
+        CONSTANT_ATOL,
         ENGINEERING,
         ENGINEERING_SMALL,
         NOT_PLOTTED,
@@ -206,6 +207,7 @@ def report_data(results_csv, plant: dict | None, *, units: str = "si") -> dict:
         "units": units,
         "engineering": {k: list(v) for k, v in ENGINEERING.items()},
         "engineering_small": {k: list(v) for k, v in ENGINEERING_SMALL.items()},
+        "zero": dict(CONSTANT_ATOL),
         "time": _b64(t[rows], "float64"),
         "rows": {"shown": int(len(rows)), "of": int(len(t))},
         "vars": out_vars,

@@ -52,6 +52,7 @@
   function show(v, x) { // a value of variable v in the current units, with its unit
     var c = conv(v.unit, Math.max(Math.abs(v.min || 0), Math.abs(v.max || 0)));
     if (x === null || x === undefined) return "–";
+    if (Math.abs(x) <= (D.zero[v.unit] || 0)) x = 0; // round-off of a zero: "0 t/h", not "6.9e-26 t/h"
     return fmt(x * c.scale + c.offset) + (c.label === "-" ? "" : " " + c.label);
   }
   function timeAxis() {
@@ -129,7 +130,7 @@
         margin: { l: 64, r: 12, t: 24, b: 38 }, height: 298,
         title: p.title ? { text: p.title, font: { size: 12 }, x: 0.01, xanchor: "left", y: 0.99, yanchor: "top" } : undefined,
         xaxis: { title: { text: ta.label }, showgrid: true, zeroline: false },
-        yaxis: { title: { text: p.quantity + " [" + unitLabel + "]" }, zeroline: false, exponentformat: "power" },
+        yaxis: { title: { text: p.quantity + " [" + unitLabel + "]" }, zeroline: false, exponentformat: "power", automargin: true },
         legend: { orientation: "h", y: 1.0, yanchor: "bottom", x: p.title ? 0.12 : 0, xanchor: "left", font: { size: 11 } },
         showlegend: true, hovermode: "x unified", shapes: markerShapes()
       };
@@ -406,14 +407,14 @@
     var layout = {
       margin: { l: 70, r: us.length > 1 ? 70 : 16, t: 8, b: 40 }, height: 338,
       xaxis: { title: { text: ta.label } },
-      yaxis: { title: { text: q(us[0]) + " [" + convs[0].label + "]" }, zeroline: false },
+      yaxis: { title: { text: q(us[0]) + " [" + convs[0].label + "]" }, zeroline: false, automargin: true, exponentformat: "power" },
       legend: { orientation: "h", y: 1.02, yanchor: "bottom", x: 0, font: { size: 11 } },
       hovermode: "x unified", shapes: markerShapes(), showlegend: true
     };
     var r0 = axisRange(traces.filter(function (t) { return t.yaxis === "y"; }), 1e-3);
     if (r0) layout.yaxis.range = r0;
     if (us.length > 1) {
-      layout.yaxis2 = { title: { text: q(us[1]) + " [" + convs[1].label + "]" }, overlaying: "y", side: "right", zeroline: false, showgrid: false };
+      layout.yaxis2 = { title: { text: q(us[1]) + " [" + convs[1].label + "]" }, overlaying: "y", side: "right", zeroline: false, showgrid: false, automargin: true, exponentformat: "power" };
       var r1 = axisRange(traces.filter(function (t) { return t.yaxis === "y2"; }), 1e-3);
       if (r1) layout.yaxis2.range = r1;
     }
