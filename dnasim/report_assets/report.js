@@ -539,12 +539,13 @@
     document.getElementById("shownodes").addEventListener("change", function (ev) { svg.classList.toggle("nonames", !ev.target.checked); });
     document.getElementById("showvalues").addEventListener("change", function (ev) { svg.classList.toggle("novalues", !ev.target.checked); });
     // a drawing wider than its box keeps its natural size (scroll) when it would shrink below 60 %
-    // a small drawing is shown up to 1.35 times its size, never more (the text stays text-sized)
+    // a small drawing is shown up to 1.35 times its size; a wide one shrinks to 3/4 at
+    // most and scrolls beyond (its text stays readable)
     var w = parseFloat(svg.getAttribute("width"));
     var fit = function () {
-      var box = svg.parentNode.clientWidth - 2;
-      svg.classList.toggle("natural", box < 0.6 * w);
-      svg.style.width = box < 0.6 * w ? w + "px" : Math.min(box, 1.35 * w) + "px";
+      var box = svg.parentNode.clientWidth - 2, narrow = box < 0.75 * w;
+      svg.classList.toggle("natural", narrow);
+      svg.style.width = narrow ? 0.75 * w + "px" : Math.min(box, 1.35 * w) + "px";
     };
     fit(); window.addEventListener("resize", fit);
   }
