@@ -67,6 +67,7 @@ RESULT_FILES = (
     "steps.png",
     "report.txt",
     "report.html",
+    "plant.json",
 )
 
 _O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)

@@ -1,29 +1,72 @@
-"""``report.html`` of a run: one self-contained page that works offline.
+"""``report.html`` of a run: a page to explore the results, offline.
 
 Contents, from the files the run wrote and the plant:
 
-- the run: plant, file, status, end time, solver statistics (steps, rejections,
-  residual evaluations, Jacobians, LU factorisations, events, wall time);
-- the plant's structure: components (type, ports -> nodes, signal inputs),
-  nodes, signal links; equations, unknowns, differential states, algebraic variables;
-- interactive plots (plotly, its JavaScript embedded in the page) of the main
-  variables, one figure per quantity (:mod:`dnasim.plots` chooses and groups them,
-  ``units="engineering"`` converts), with the discontinuities marked;
-- the event table with the iterates of each location (the seed's Table 10.1);
-- step size and order over time (the seed's Fig. 10.7).
+- the run in one line: plant, file, status, end time, steps, events, wall time;
+- the plant schematic (:mod:`dnasim.schematic`): an SVG drawn from the network
+  graph, components by type, nodes, fluid lines by medium, signal links dashed;
+  hovering a symbol shows the final value, minimum and maximum of its
+  variables, clicking it lists them beside the drawing and selects them in the
+  variable browser; the values of the main quantities are written under the
+  symbols;
+- the variable browser: every column of ``results.csv``, grouped by component
+  (or node) or by quantity and unit, with a search box (words, or shell
+  patterns like ``*.T_out``; Enter plots the first match); a click plots a
+  variable; a plot takes two units at most (left and right axis), a variable of
+  a third unit opens the next plot;
+- the main variables: the panels of ``variables.png`` (:func:`dnasim.plots.select_panels`),
+  interactive, with the constants listed;
+- the event table (the seed's Table 10.1), collapsed when long, under a summary
+  line: the number of located switches and how often each switch fired;
+- step size and order over time (the seed's Fig. 10.7);
+- solver statistics and the plant's structure (equations, unknowns, components,
+  nodes, links).
 
-Nothing is fetched from the network: no CDN script, no web font, no stylesheet link.
+The page holds its data (each column as base64 float32 differences from its
+first value, constants as one number; rows are thinned beyond
+:data:`MAX_VALUES` values, the restarts kept) and its own script; plotly is the
+file ``plotly.min.js`` beside it (:func:`write_plotly_js`: written once per
+folder, left alone when already there and identical), referenced by a relative
+path, so the page works offline and from a copied folder. Nothing is fetched
+from the network: no CDN, no web font, no stylesheet link.
+
+Every string from the plant (names, description, path, event rows) is escaped:
+in HTML with ``html.escape``, in the embedded JSON with ``<``, ``>``, ``&``
+written as ``\\u003c`` ..., and the script builds the page with ``textContent``
+only, so no plant file can put markup or script into the page.
 """
 
 from __future__ import annotations
 
+import base64
+import csv
+import hashlib
 import html
+import json
 import math
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_report", "plant_structure", "render_report"]
+__all__ = [
+    "MAX_VALUES",
+    "PLOTLY_JS",
+    "write_report",
+    "write_plotly_js",
+    "plant_structure",
+    "render_report",
+    "report_data",
+    "event_summary",
+]
+
+#: values of the results table embedded in the page at most (about 5.3 bytes each);
+#: beyond it, rows are thinned (restarts and the last row kept)
+MAX_VALUES = 1_500_000
+#: the plotting library's file beside report.html
+PLOTLY_JS = "plotly.min.js"
+#: an event table longer than this is collapsed under its summary line
+EVENTS_OPEN_MAX = 20
 
 
 # --------------------------------------------------------------------------- adapters
@@ -49,6 +92,7 @@ def plant_structure(loaded) -> dict:
         "n_differential": n_diff,
         "n_algebraic": int(dae.n) - n_diff,
         "n_switches": len(dae.events),
+        "system": dae,
     }
 
 
@@ -59,6 +103,191 @@ def _description(loaded) -> str:
         if isinstance(d, str) and d:
             return d
     return ""
+
+
+# --------------------------------------------------------------------------- data
+
+
+def _b64(arr, dtype: str) -> str:
+    """Little-endian ``dtype`` ("float32", "float64") bytes of ``arr``, base64."""
+    le = {"float32": "<f4", "float64": "<f8"}[dtype]
+    return base64.b64encode(np.ascontiguousarray(arr, dtype=le).tobytes()).decode("ascii")
+
+
+def _num(x):
+    """A float for JSON (None for NaN and infinities)."""
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _rows_kept(t, restart, limit_rows: int) -> np.ndarray:
+    """Indices of the rows embedded: all when they fit, else every k-th row, the
+    first and last, and both sides of every restart."""
+    n = len(t)
+    if n <= limit_rows:
+        return np.arange(n)
+    step = math.ceil(n / max(limit_rows, 2))
+    keep = set(range(0, n, step)) | {0, n - 1}
+    if restart is not None:
+        for i in np.flatnonzero(np.asarray(restart) == 1):
+            keep.update((max(i - 1, 0), int(i)))
+    return np.array(sorted(keep))
+
+
+def _series(values) -> dict:
+    """One column for the page: a constant as ``{"c": v}``, else ``{"b": first,
+    "d": base64 float32 of v - first}`` (the differences keep seven digits of the
+    variation, not of the magnitude: 0.01 Pa of a 100 bar curve)."""
+    v = np.asarray(values, dtype=float)
+    finite = v[np.isfinite(v)]
+    if finite.size == v.size and (v.size == 0 or float(finite.max()) == float(finite.min())):
+        return {"c": _num(finite[0]) if finite.size else None}
+    base = float(finite[0]) if finite.size else 0.0
+    return {"b": base, "d": _b64(v - base, "float32")}
+
+
+def _stats(values) -> dict:
+    v = np.asarray(values, dtype=float)
+    f = v[np.isfinite(v)]
+    if not f.size:
+        return {"first": None, "final": None, "min": None, "max": None}
+    return {
+        "first": _num(f[0]),
+        "final": _num(f[-1]),
+        "min": _num(f.min()),
+        "max": _num(f.max()),
+    }
+
+
+def report_data(results_csv, plant: dict | None, *, units: str = "si") -> dict:
+    """The data the page's script works on (JSON-ready): time, every variable with
+    its unit, quantity, group, statistics and values, the default panels, the
+    constants, events, restarts and steps. ``plant``: the description of
+    :mod:`dnasim.plantinfo` (None: the groups follow the names)."""
+    from dnasim.plots import (
+        CONSTANT_ATOL,
+        ENGINEERING,
+        ENGINEERING_SMALL,
+        NOT_PLOTTED,
+        quantity_of,
+        read_run,
+        select_panels,
+    )
+
+    names, unit_of, data, steps, events, restarts = read_run(results_csv)
+    t = np.asarray(data["time"], dtype=float)
+    variables = [n for n in names[1:] if n not in NOT_PLOTTED]
+    limit_rows = max(MAX_VALUES // max(len(variables), 1), 200)
+    rows = _rows_kept(t, data.get("restart"), limit_rows)
+    comps = {c["name"]: c for c in (plant or {}).get("components", ())}
+    nodes = set((plant or {}).get("nodes", ()))
+    out_vars = []
+    for n in variables:
+        owner = n.split(".", 1)[0] if "." in n else ""
+        unit = unit_of.get(n, "") or "-"
+        kind = "node" if owner in nodes else ("component" if owner in comps else "")
+        out_vars.append(
+            {
+                "name": n,
+                "unit": "-" if unit == "1" else unit,
+                "quantity": quantity_of(n, unit),
+                "owner": owner,
+                "kind": kind,
+                **_stats(data[n]),
+                "data": _series(np.asarray(data[n], dtype=float)[rows]),
+            }
+        )
+    panels, constants = select_panels(variables, unit_of, data, plant)
+    step_arr = np.array(steps, dtype=float).reshape(-1, 3)
+    return {
+        "plant": {
+            "name": (plant or {}).get("name", ""),
+            "description": (plant or {}).get("description", ""),
+        },
+        "units": units,
+        "engineering": {k: list(v) for k, v in ENGINEERING.items()},
+        "engineering_small": {k: list(v) for k, v in ENGINEERING_SMALL.items()},
+        "zero": dict(CONSTANT_ATOL),
+        "time": _b64(t[rows], "float64"),
+        "rows": {"shown": int(len(rows)), "of": int(len(t))},
+        "vars": out_vars,
+        "components": {
+            name: {"type": c.get("type", ""), "kind": _kind(c.get("type", ""))}
+            for name, c in comps.items()
+        },
+        "nodes": sorted(nodes),
+        "panels": [
+            {
+                "title": p.title,
+                "quantity": p.quantity,
+                "unit": p.unit,
+                "limits": list(p.limits) if p.limits else None,
+                "curves": [
+                    {"name": c.names[0], "label": c.label, "sign": c.sign, "dashed": c.dashed}
+                    for c in p.curves
+                ],
+            }
+            for p in panels
+        ],
+        "constants": [{"name": n, "value": _num(v), "unit": u} for n, v, u in constants],
+        "events": [float(x) for x in events],
+        "restarts": [float(x) for x in restarts],
+        "steps": {
+            "t": _b64(step_arr[:, 0], "float64"),
+            "h": _b64(step_arr[:, 1], "float64"),
+            "order": _b64(step_arr[:, 2], "float32"),
+        },
+    }
+
+
+def _kind(type_name: str) -> str:
+    from dnasim.schematic import symbol_kind
+
+    return symbol_kind(type_name)
+
+
+def _json_for_script(obj) -> str:
+    """JSON that is safe inside ``<script type="application/json">``: no ``<``,
+    ``>`` or ``&`` (no ``</script>``, no ``<!--``), no line separators."""
+    text = json.dumps(obj, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    for a, b in (("<", "\\u003c"), (">", "\\u003e"), ("&", "\\u0026")):
+        text = text.replace(a, b)
+    return text.replace("\u2028", "\\u2028").replace("\u2029", "\\u2029")
+
+
+# --------------------------------------------------------------------------- events
+
+
+def _read_events(path: Path) -> tuple[list[str], list[list[str]]]:
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rdr = csv.reader(f)
+            header = next(rdr, None) or []
+            return header, [r for r in rdr if r]
+    except OSError:
+        return [], []
+
+
+def event_summary(header, rows) -> tuple[int, list[tuple[str, int]]]:
+    """(number of located switches, [(switch "component: name", times it fired)])
+    of the rows of ``events.csv`` (one row per iterate of each location); the
+    elements of a vector switch count together ("cold_h_v[i] saturated liquid")."""
+    import re
+
+    col = {h: i for i, h in enumerate(header)}
+    if "event" not in col:
+        return 0, []
+    seen, counts = set(), {}
+    for r in rows:
+        ev = r[col["event"]]
+        if ev in seen:
+            continue
+        seen.add(ev)
+        comp = r[col["component"]] if "component" in col else ""
+        sw = re.sub(r"\[\d+\]", "[i]", r[col["switch"]]) if "switch" in col else ""
+        key = f"{comp}: {sw}" if comp else sw
+        counts[key] = counts.get(key, 0) + 1
+    return len(seen), sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))
 
 
 # --------------------------------------------------------------------------- html
@@ -73,25 +302,19 @@ _STAT_NAMES = {
     "newton_iters": "Newton iterations",
 }
 
-_CSS = """
-body { font-family: sans-serif; margin: 1.5em 2em; color: #222; max-width: 1300px; }
-h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.2em; margin-top: 1.6em;
-border-bottom: 1px solid #ccc; }
-table { border-collapse: collapse; font-size: 0.9em; margin: 0.5em 0; }
-th, td { border: 1px solid #ccc; padding: 2px 8px; text-align: left; vertical-align: top; }
-th { background: #eee; } td.num { text-align: right; font-family: monospace; }
-.ok { color: #070; font-weight: bold; } .bad { color: #b00; font-weight: bold; }
-.grid { display: flex; gap: 2em; flex-wrap: wrap; } .muted { color: #666; font-size: 0.9em; }
-"""
+
+def _asset(name: str) -> str:
+    return resources.files("dnasim").joinpath("report_assets", name).read_text(encoding="utf-8")
 
 
-def _table(header, rows, num_cols=()) -> str:
-    out = ["<table><tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in header) + "</tr>"]
+def _table(header, rows, num_cols=(), cls="") -> str:
+    c = f' class="{cls}"' if cls else ""
+    out = [f"<table{c}><tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in header) + "</tr>"]
     for r in rows:
         cells = []
         for j, v in enumerate(r):
-            cls = ' class="num"' if j in num_cols else ""
-            cells.append(f"<td{cls}>{html.escape(str(v))}</td>")
+            klass = ' class="num"' if j in num_cols else ""
+            cells.append(f"<td{klass}>{html.escape(str(v))}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
     out.append("</table>")
     return "\n".join(out)
@@ -103,129 +326,150 @@ def _fmt(x) -> str:
     return str(x)
 
 
-def _figures(results_csv, units: str) -> list:
-    """Plotly figures: one per quantity of the default selection, then steps."""
-    import plotly.graph_objects as go
-    from plotly.subplots import make_subplots
-
-    from dnasim.output import _time_axis
-    from dnasim.plots import (
-        NOT_PLOTTED,
-        _components,
-        _panels,
-        axis_unit,
-        curve_label,
-        default_selection,
-        display,
-        read_run,
-        y_limits,
-    )
-
-    names, unit_of, data, steps, events, restarts = read_run(results_csv)
-    variables = [n for n in names[1:] if n not in NOT_PLOTTED]
-    chosen = default_selection(variables, unit_of) or variables[:8]
-    scale, t_label = _time_axis(data["time"])
-    t = data["time"] / scale
-    comps = _components(list(data))
-    figs = []
-    layout = {
-        "margin": {"l": 70, "r": 20, "t": 40, "b": 40},
-        "legend": {
-            "orientation": "h",
-            "y": 1.02,
-            "yanchor": "bottom",
-            "x": 0,
-            "font": {"size": 11},
-        },
-    }
-
-    def markers(fig, rows=None):
-        for te in restarts:
-            fig.add_vline(x=te / scale, line_dash="dot", line_color="#999", line_width=1)
-        for te in events:
-            fig.add_vline(x=te / scale, line_dash="dash", line_color="#d62728", line_width=1)
-
-    for q, merged in _panels(chosen, unit_of, data, units):
-        series, shown = {}, "-"
-        for g in merged:
-            series[g[0]], shown = display(data[g[0]], unit_of.get(g[0], ""), units)
-        fig = go.Figure()
-        for g in merged:
-            fig.add_trace(go.Scatter(x=t, y=series[g[0]], mode="lines", name=curve_label(g, comps)))
-        markers(fig)
-        lim = y_limits([series[g[0]] for g in merged])
-        if lim is not None:
-            fig.update_yaxes(range=list(lim))
-        fig.update_layout(
-            xaxis_title=t_label,
-            yaxis_title=f"{q} [{axis_unit(q, shown)}]",
-            height=380,
-            showlegend=True,  # also for one curve: its name
-            **layout,
-        )
-        figs.append(fig)
-    if steps:
-        arr = np.array(steps, dtype=float)
-        fig = make_subplots(rows=2, cols=1, shared_xaxes=True, vertical_spacing=0.06)
-        fig.add_trace(
-            go.Scatter(
-                x=arr[:, 0] / scale,
-                y=arr[:, 1],
-                mode="lines+markers",
-                marker_size=3,
-                name="step size [s]",
-            ),
-            row=1,
-            col=1,
-        )
-        fig.add_trace(
-            go.Scatter(
-                x=arr[:, 0] / scale, y=arr[:, 2], mode="lines", line_shape="hv", name="order"
-            ),
-            row=2,
-            col=1,
-        )
-        fig.update_yaxes(type="log", title_text="step size [s]", row=1, col=1)
-        fig.update_yaxes(title_text="order", dtick=1, row=2, col=1)
-        fig.update_xaxes(title_text=t_label, row=2, col=1)
-        markers(fig)
-        fig.update_layout(height=520, showlegend=False, margin=layout["margin"])
-        figs.append(fig)
-    return figs
+def _boundary_flows(data_vars, plant) -> dict:
+    """Mean flow [kg/s] of each boundary over the run (its direction in the drawing)."""
+    out = {}
+    byname = {v["name"]: v for v in data_vars}
+    for c in (plant or {}).get("components", ()):
+        if c.get("supply") is None:
+            continue
+        v = byname.get(f"{c['name']}.m")
+        if v is not None and v["final"] is not None and v["first"] is not None:
+            out[c["name"]] = (v["final"] + v["first"]) / 2 or v["max"] or 0.0
+    return out
 
 
 def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
     """The HTML text of the report (see the module docstring)."""
-    import csv
+    from dnasim.plantinfo import describe_loaded, read_plant_json
+    from dnasim.schematic import schematic_svg
 
     out = Path(out_dir)
     results = out / "results.csv"
     st = plant_structure(loaded)
-    desc = _description(loaded)
+    plant = read_plant_json(out) or describe_loaded(loaded, st["system"])
+    desc = _description(loaded) or plant.get("description", "")
+    data = report_data(results, plant, units=units)
+    unit_of = {v["name"]: ("1" if v["unit"] == "-" else v["unit"]) for v in data["vars"]}
+    svg = schematic_svg(plant, _boundary_flows(data["vars"], plant), unit_of)
     stats = dict(outcome.stats or {})
     status_cls = "ok" if outcome.success else "bad"
+    name = html.escape(st["name"])
+    ev_header, ev_rows = _read_events(out / "events.csv")
+    n_events, per_switch = event_summary(ev_header, ev_rows)
+
+    facts = [
+        ("status", outcome.status),
+        ("t reached", f"{_fmt(outcome.t_reached)} s of {_fmt(outcome.t_end)} s"),
+        ("rows", f"{outcome.rows}"),
+        ("steps", f"{outcome.n_steps}"),
+        ("events", f"{n_events}"),
+        ("unknowns", f"{st['n_unknowns']} ({st['n_differential']} states)"),
+        ("wall time", f"{outcome.wall_time:.2f} s"),
+    ]
     parts = [
-        "<!DOCTYPE html><html><head><meta charset='utf-8'>",
-        f"<title>dnasim report: {html.escape(st['name'])}</title>",
-        f"<style>{_CSS}</style></head><body>",
-        f"<h1>{html.escape(st['name'])}</h1>",
-        f"<div class='muted'>{html.escape(desc)}</div>" if desc else "",
-        f"<p>Plant file <code>{html.escape(str(getattr(loaded, 'path', '')))}</code>; "
-        f"results in <code>{html.escape(str(out))}</code>. Status: "
-        f"<span class='{status_cls}'>{html.escape(outcome.status)}</span>"
-        + (f" ({html.escape(outcome.message)})" if outcome.message else "")
-        + "</p>",
-    ]
-    warnings = list(getattr(outcome, "warnings", []) or [])
-    if warnings:  # the components' warnings of the run (a cavitating pump)
-        parts.append(
-            "<p class='bad'>Warnings:</p><ul>"
-            + "".join(f"<li>{html.escape(w)}</li>" for w in warnings)
-            + "</ul>"
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+        "<meta name='viewport' content='width=device-width, initial-scale=1'>",
+        f"<title>{name}: dnasim report</title>",
+        f"<style>{_asset('report.css')}</style></head><body>",
+        "<header class='top'>",
+        f"<div class='title'><span class='plant'>{name}</span>"
+        + (f"<span class='desc'>{html.escape(desc)}</span>" if desc else "")
+        + "</div>",
+        "<nav><a href='#plant'>Plant</a><a href='#browser'>Variables</a>"
+        "<a href='#main'>Main plots</a><a href='#events'>Events</a>"
+        "<a href='#solver'>Solver</a><a href='#structure'>Structure</a></nav>",
+        "<div class='unitswitch' role='group' aria-label='units'>"
+        "<button type='button' data-units='si'>SI</button>"
+        "<button type='button' data-units='engineering'>engineering</button></div>",
+        "</header><main>",
+        "<div id='noplotly' class='warn' hidden>plotly.min.js was not found beside this "
+        "file: the plots cannot be drawn (the schematic, the variable list and the tables "
+        "work). Copy the whole results folder, not report.html alone.</div>",
+        "<div class='facts'>"
+        + "".join(
+            f"<div class='fact{' ' + status_cls if k == 'status' else ''}'><span>{html.escape(k)}"
+            f"</span><b>{html.escape(v)}</b></div>"
+            for k, v in facts
         )
-    parts += [
-        "<h2>Run and solver statistics</h2><div class='grid'>",
+        + "</div>",
+        "<p class='muted'>Plant file <code>"
+        + html.escape(str(getattr(loaded, "path", "")))
+        + "</code>; results in <code>"
+        + html.escape(str(out))
+        + "</code>"
+        + (f". {html.escape(outcome.message)}" if outcome.message else "")
+        + "</p>",
+        _warnings_html(getattr(outcome, "warnings", None)),
+        # ---- plant
+        "<section id='plant'><h2>Plant</h2>",
+        "<div class='plantwrap'><div class='svgbox'>",
+        svg,
+        "</div><aside id='card' class='card'><p class='muted'>Point at a component or a "
+        "node for its values; click it to list its variables here and in the variable "
+        "browser.</p></aside></div>",
+        "<div class='legend'><span class='lg water'>water / steam</span>"
+        "<span class='lg gas'>gas</span><span class='lg other'>other fluid</span>"
+        "<span class='lg signal'>signal</span><span class='lg tap'>instrument tap</span>"
+        "<label><input type='checkbox' id='shownodes' checked> node names</label>"
+        "<label><input type='checkbox' id='showvalues' checked> final values</label></div>",
+        "</section>",
+        # ---- browser
+        "<section id='browser'><h2>Variables</h2>",
+        "<div class='browser'><aside class='varlist'>",
+        "<div class='controls'><input id='search' type='search' autocomplete='off' "
+        "placeholder='Search: drum level, *.T_out, bar, Valve … (Enter plots the first)'>",
+        "<div class='seg' role='group' aria-label='group by'>group by "
+        "<button type='button' data-group='component' class='on'>component</button>"
+        "<button type='button' data-group='quantity'>quantity</button></div>",
+        "<div id='count' class='muted'></div></div>",
+        "<div id='tree' class='tree'></div></aside>",
+        "<div class='plots'><div class='plotbar'>"
+        "<button type='button' id='newplot'>+ new plot</button>"
+        "<button type='button' id='clearplots'>clear</button>"
+        "<span class='muted'>A click on a variable adds it to the active plot (two units at "
+        "most, left and right axis; a third unit opens a new plot). Drag to zoom, double-click "
+        "to reset.</span></div><div id='plotstack'></div></div></div>",
+        "</section>",
+        # ---- main plots
+        "<section id='main'><h2>Main variables</h2>",
+        "<p class='muted'>Chosen by quantity, one unit per axis; grey dotted: time events "
+        "and restarts; red dashed: located switches. Coinciding curves are drawn once, their "
+        "names joined by '='.</p>",
+        "<div id='panels' class='panels'></div><p id='constants' class='muted'></p></section>",
     ]
+    # ---- events
+    parts.append("<section id='events'><h2>Events</h2>")
+    if ev_rows:
+        summary = f"{n_events} located switch{'es' if n_events != 1 else ''}"
+        if per_switch:
+            summary += ": " + ", ".join(f"{k} × {v}" for k, v in per_switch)
+        summary += f" ({len(ev_rows)} rows of iterates)"
+        opened = " open" if len(ev_rows) <= EVENTS_OPEN_MAX else ""
+        parts.append(
+            f"<details class='events'{opened}><summary>{html.escape(summary)}</summary>"
+            "<p class='muted'>The location of the switching points (the seed's Table 10.1): "
+            "iteration 1 is the last accepted step before the sign change, 2 the step that "
+            "detected it, then the refinements; the last iterate is the switching time.</p>"
+        )
+        parts.append(
+            _table(
+                [{"time": "time [s]"}.get(h, h) for h in ev_header],
+                [
+                    [_fmt(float(v)) if j in (2, 3) and _isfloat(v) else v for j, v in enumerate(r)]
+                    for r in ev_rows
+                ],
+                num_cols=(0, 1, 2, 3),
+            )
+        )
+        parts.append("</details>")
+    else:
+        parts.append("<p>No switch changed its state during the run.</p>")
+    parts.append("</section>")
+    # ---- solver
+    parts.append("<section id='solver'><h2>Solver</h2>")
+    parts.append("<div id='steps' class='stepsplot'></div>")
+    parts.append("<p class='muted'>Step size and order over time (the seed's Fig. 10.7).</p>")
     sim = getattr(loaded, "simulation", None)
     run_rows = [
         ("end time reached [s]", _fmt(outcome.t_reached)),
@@ -242,6 +486,7 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
                 if k == "output_interval":
                     k, v = "output_interval [s]", "every accepted step" if v is None else v
                 run_rows.append((k, _fmt(v)))
+    parts.append("<div class='grid'>")
     parts.append(_table(("run", "value"), run_rows, num_cols=(1,)))
     parts.append(
         _table(
@@ -252,9 +497,9 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
         if stats
         else "<p>no solver statistics</p>"
     )
-    parts.append("</div>")
-
-    parts.append("<h2>Plant structure</h2><div class='grid'>")
+    parts.append("</div></section>")
+    # ---- structure
+    parts.append("<section id='structure'><h2>Structure</h2><div class='grid'>")
     parts.append(
         _table(
             ("equations", "unknowns", "differential states", "algebraic", "switches"),
@@ -270,7 +515,7 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
             num_cols=(0, 1, 2, 3, 4),
         )
     )
-    parts.append("</div>")
+    parts.append("</div><details><summary>components, nodes and signal links</summary>")
     parts.append(
         _table(
             ("component", "type", "fluid ports -> nodes", "signal inputs"),
@@ -288,68 +533,70 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
     parts.append(
         f"<p>Nodes ({len(st['nodes'])}): {html.escape(', '.join(st['nodes']))}<br>"
         f"Signal links ({len(st['links'])}): {html.escape('; '.join(st['links']) or 'none')}</p>"
+        "</details></section>"
     )
-
     parts.append(
-        "<h2>Main variables</h2><p class='muted'>Grouped by quantity"
-        + (", engineering units" if units == "engineering" else ", SI units")
-        + ". Grey dotted: time events and restarts; red dashed: located switches. "
-        "Zoom with the mouse, double-click to reset; click a legend entry to hide it. "
-        "Curves that coincide are drawn once, their names joined by '='.</p>"
+        "</main><footer class='muted'>Written by dnasim. Works offline: the data and the "
+        f"script are in this page, the plotting library is {PLOTLY_JS} beside it.</footer>"
     )
-    figs = _figures(results, units)
-    first = True
-    plots_html = []
-    for fig in figs:
-        plots_html.append(
-            fig.to_html(
-                full_html=False,
-                include_plotlyjs=True if first else False,  # embedded once, never a CDN
-                config={"displaylogo": False, "responsive": True},
-            )
-        )
-        first = False
-    step_html = plots_html.pop() if (out / "steps.csv").exists() and plots_html else None
-    parts.extend(plots_html)
-
-    parts.append("<h2>Events: location of the switching points (seed Table 10.1)</h2>")
-    ev_path = out / "events.csv"
-    rows = []
-    if ev_path.exists():
-        with open(ev_path, newline="") as f:
-            rdr = csv.reader(f)
-            header = next(rdr, None)
-            rows = list(rdr)
-    if rows:
-        parts.append(
-            "<p class='muted'>Iteration 1 is the last accepted step before the sign change, "
-            "2 the step that detected it, then the refinements; the last iterate is the "
-            "switching time.</p>"
-        )
-        parts.append(
-            _table(
-                [{"time": "time [s]"}.get(h, h) for h in header],
-                [[_fmt(float(v)) if j in (2, 3) else v for j, v in enumerate(r)] for r in rows],
-                num_cols=(0, 1, 2, 3),
-            )
-        )
-    else:
-        parts.append("<p>No switch changed its state during the run.</p>")
-    if step_html is not None:
-        parts.append("<h2>Step size and order (seed Fig. 10.7)</h2>")
-        parts.append(step_html)
     parts.append(
-        "<p class='muted'>Written by dnasim; self-contained (plotly embedded), no network "
-        "access needed.</p></body></html>"
+        f"<script type='application/json' id='dnasim-data'>{_json_for_script(data)}</script>"
     )
+    parts.append(f"<script src='{PLOTLY_JS}'></script>")
+    parts.append(f"<script>{_asset('report.js')}</script>")
+    parts.append("</body></html>")
     return "\n".join(p for p in parts if p)
 
 
+def _isfloat(v) -> bool:
+    try:
+        float(v)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def _plotly_source() -> bytes:
+    return resources.files("plotly").joinpath("package_data", PLOTLY_JS).read_bytes()
+
+
+def write_plotly_js(out_dir) -> tuple[Path, bool]:
+    """``plotly.min.js`` beside the report: written when missing or different
+    (another plotly version), left alone when already there and identical (one
+    copy per folder, shared by the reports in it). Returns (path, written)."""
+    from dnasim.output import _atomic_write
+
+    path = Path(out_dir) / PLOTLY_JS
+    src = _plotly_source()
+    try:
+        if path.is_file() and not path.is_symlink() and path.stat().st_size == len(src):
+            if hashlib.sha256(path.read_bytes()).digest() == hashlib.sha256(src).digest():
+                return path, False
+    except OSError:
+        pass
+    _atomic_write(path, lambda f: f.write(src))
+    return path, True
+
+
 def write_report(outcome, loaded, out_dir, *, units: str = "si") -> Path:
-    """Write ``report.html`` into ``out_dir`` (atomically) and return its path."""
+    """Write ``report.html`` into ``out_dir`` (atomically), and ``plotly.min.js``
+    beside it when it is not there yet (:func:`write_plotly_js`); returns the
+    report's path."""
     from dnasim.output import _atomic_write
 
     text = render_report(outcome, loaded, out_dir, units=units)
+    write_plotly_js(out_dir)
     path = Path(out_dir) / "report.html"
     _atomic_write(path, lambda f: f.write(text.encode("utf-8")))
     return path
+
+
+def _warnings_html(warnings) -> str:
+    """The components' warnings of the run (a cavitating pump), or nothing."""
+    if not warnings:
+        return ""
+    return (
+        "<div class='warn'><b>Warnings</b><ul>"
+        + "".join(f"<li>{html.escape(str(w))}</li>" for w in warnings)
+        + "</ul></div>"
+    )

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from dnasim.output import clear_results, write_events_csv, write_steps_csv
+from dnasim.plantinfo import describe_loaded, write_plant_json
 from dnasim.sinks import RESTART_COLUMN, CSVSink, OutputRows
 
 __all__ = [
@@ -236,7 +237,8 @@ def run_plant(
     """Simulate ``loaded`` (a ``dnasim.plantfile.LoadedPlant``), streaming into ``out_dir``.
 
     The previous run's result files are removed first (:func:`clear_results`), so
-    whatever is in ``out_dir`` afterwards belongs to this run. Rows go to
+    whatever is in ``out_dir`` afterwards belongs to this run; ``plant.json`` (the
+    plant's graph, :mod:`dnasim.plantinfo`) is written before the run starts. Rows go to
     ``results.csv`` as they are computed and are not kept in memory; with
     ``keep_rows=True`` the solver's result (``outcome.result``, a ``DAEResult``)
     also holds them (t, y, yp) and its dense output. ``system``: the compiled
@@ -264,6 +266,7 @@ def run_plant(
     sim = loaded.simulation
     if system is None:
         system = compile_plant(loaded.plant)
+    write_plant_json(out, describe_loaded(loaded, system))
     t_start = time.perf_counter()
 
     state: dict[str, Any] = {

@@ -46,13 +46,14 @@ STAGES: list[tuple[str, list[str]]] = [
         "runner",
         [
             "dnasim.runner",
+            "dnasim.plantinfo",
             "dnasim.plots",
             "dnasim.linearize",
             "dnasim.testing",
             "dnasim.design_point",
         ],
     ),
-    ("tools", ["dnasim.sweeps", "dnasim.report", "dnasim.reference"]),
+    ("tools", ["dnasim.sweeps", "dnasim.schematic", "dnasim.report", "dnasim.reference"]),
     ("command line", ["dnasim.cli", "dnasim.entry", "dnasim.__main__", "dnasim"]),
 ]
 
