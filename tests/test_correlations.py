@@ -256,8 +256,50 @@ def test_metal_tables():
     assert metals.metal(" p235gh ").name == "P235GH"
     with pytest.raises(KeyError, match="no tabulated source"):
         metals.metal("P91")
+    with pytest.raises(KeyError, match="disagree"):
+        metals.metal("X10CrMoVNb9-1")
     with pytest.raises(KeyError, match="known"):
         metals.metal("unobtainium")
     for name in metals.metal_names():
         mm = metals.metal(name)
-        assert len(mm.T) == len(mm.lam) == len(mm.c) and all(np.diff(mm.T) > 0)
+        T_lam = mm.T_lam or mm.T
+        assert len(mm.T) == len(mm.c) and all(np.diff(mm.T) > 0)
+        assert len(T_lam) == len(mm.lam) and all(np.diff(T_lam) > 0)
+
+
+def test_metal_rows_checked_against_a_second_transcription():
+    # Incropera Table A.1 rows as reproduced in a public copy of the appendix (rows of
+    # AISI 316 and AISI 347, pure copper): the values here are those, digit for digit
+    m = metals.metal("316")
+    assert (m.rho, m.T, m.lam, m.c) == (
+        8238.0, (300.0, 400.0, 600.0, 800.0, 1000.0), (13.4, 15.2, 18.3, 21.3, 24.2),
+        (468.0, 504.0, 550.0, 576.0, 602.0))  # fmt: skip
+    m = metals.metal("347")
+    assert (m.rho, m.lam, m.c) == (
+        7978.0, (14.2, 15.8, 18.9, 21.9, 24.7), (480.0, 513.0, 559.0, 585.0, 606.0))  # fmt: skip
+    m = metals.metal("copper")
+    assert m.lam == (482.0, 413.0, 401.0, 393.0, 379.0, 366.0, 352.0, 339.0)
+    assert m.c == (252.0, 356.0, 385.0, 397.0, 417.0, 433.0, 451.0, 480.0)
+
+
+def test_t22_conductivity_and_metal_enthalpy():
+    t22 = metals.metal("T22")
+    assert metals.metal("10CrMo9-10").lam == t22.lam and "TRANSFORM" in t22.source
+    # the source's table: 36.17 W/(m K) at 70 degF, 37.21 from 300 to 450 degF, 26.48
+    # at 1500 degF (ORNL TRANSFORM Cr225Mo1; OSTI 455553)
+    assert float(t22.conductivity(294.26)) == 36.17
+    assert float(t22.conductivity(480.0)) == 37.21
+    assert float(t22.conductivity(1088.71)) == 26.48
+    # c and rho: the 1 Cr-1/2 Mo row (stated in metals.py)
+    assert t22.c == metals.metal("T12").c and t22.rho == metals.metal("T12").rho
+    # e(T) = integral of c dT: its derivative is c (central differences of a piecewise
+    # quadratic: exact up to round-off away from the table's points, hence rel 1e-6)
+    for name in ("P235GH", "304", "copper", "T22"):
+        mm = metals.metal(name)
+        T = np.array([150.0, 310.0, 555.0, 777.0, 950.0, 1300.0])
+        dT = 1e-3
+        de = (mm.enthalpy(T + dT) - mm.enthalpy(T - dT)) / (2 * dT)
+        np.testing.assert_allclose(de, mm.heat_capacity(T), rtol=1e-6)
+    # and e is the trapezoidal integral of the (linear) table between its points
+    cs = metals.metal("P235GH")
+    assert float(cs.enthalpy(400.0) - cs.enthalpy(300.0)) == pytest.approx(0.5 * (446 + 501) * 100)
