@@ -303,3 +303,50 @@ def test_t22_conductivity_and_metal_enthalpy():
     # and e is the trapezoidal integral of the (linear) table between its points
     cs = metals.metal("P235GH")
     assert float(cs.enthalpy(400.0) - cs.enthalpy(300.0)) == pytest.approx(0.5 * (446 + 501) * 100)
+
+
+# ------------------------------------------------------- issue 22 items 1-3 additions
+
+
+def test_clapeyron_dp_sat_against_if97():
+    # p_sat(T_sat + dT) - p from the integrated Clausius-Clapeyron form against IF97's
+    # saturation line (CoolProp's IF97 backend, independent code): within the 1 % (to
+    # 15 K) and 2.5 % (to 30 K) the docstring states, 1 to 150 bar
+    from CoolProp.CoolProp import PropsSI
+
+    for p in (1e5, 10e5, 60e5, 150e5):
+        Ts = PropsSI("T", "P", p, "Q", 0, "IF97::Water")
+        rl = PropsSI("D", "P", p, "Q", 0, "IF97::Water")
+        rv = PropsSI("D", "P", p, "Q", 1, "IF97::Water")
+        hlv = PropsSI("H", "P", p, "Q", 1, "IF97::Water") - PropsSI("H", "P", p, "Q", 0, "IF97::Water")
+        for dT in (0.5, 5.0, 15.0, 30.0):
+            exact = PropsSI("P", "T", Ts + dT, "Q", 0, "IF97::Water") - p
+            got = float(boiling.clapeyron_dp_sat(dT, Ts, p, hlv, rl, rv))
+            assert got == pytest.approx(exact, rel=0.01 if dT <= 15 else 0.025), (p, dT)
+
+
+def test_nusselt_horizontal_tube_against_the_plate_form():
+    # Nusselt's theory: the horizontal tube's 0.729 against the vertical plate's 0.943
+    # with the length replaced by D (the plate form as the ht library documents it,
+    # h = 0.943 [g rho_l (rho_l - rho_v) k^3 h_lv/(mu dT L)]^(1/4)), both with
+    # Rohsenow's h'_lv = h_lv + 0.68 cp dT; the bank of N rows: N^(-1/6) (Kern)
+    g = 9.80665
+    D, dT, rl, rv, mu, k, cp, hlv = 0.025, 8.0, 958.0, 0.6, 2.8e-4, 0.68, 4217.0, 2.257e6
+    h_mod = hlv + 0.68 * cp * dT
+    plate = 0.943 * (g * rl * (rl - rv) * k**3 * h_mod / (mu * dT * D)) ** 0.25
+    one = float(condensation.nusselt_horizontal_tube(D, dT, rl, rv, mu, k, cp, hlv))
+    assert one == pytest.approx(0.729 / 0.943 * plate, rel=1e-12)
+    assert float(condensation.nusselt_horizontal_tube(D, dT, rl, rv, mu, k, cp, hlv, 64)) == (
+        pytest.approx(one * 64 ** (-1 / 6), rel=1e-12)
+    )
+    # steam at 1 atm on a 25 mm tube 8 K below saturation: about 11 kW/(m2 K), the
+    # order of Incropera's horizontal-tube examples
+    assert 8e3 < one < 15e3
+
+
+def test_darcy_friction_with_haaland_as_the_turbulent_law():
+    Re = np.array([500.0, 3000.0, 1e5])
+    f_c = friction.darcy_friction_Re(Re, 1e-4)
+    f_h = friction.darcy_friction_Re(Re, 1e-4, friction.haaland)
+    assert f_c[0] == f_h[0] == 64.0  # laminar: the same
+    np.testing.assert_allclose(f_h[1:], f_c[1:], rtol=0.02)  # Haaland's 2 %
