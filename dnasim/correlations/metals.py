@@ -27,10 +27,16 @@ row of Incropera's table (the ferritic Cr-Mo rows of Table A.1 have the same c(T
 0.5 %, and 2 1/4 Cr-1 Mo's density is 7.85 g/cm3 by the usual data sheets, 0.1 % from
 that row's 7858 kg/m3): a composite, stated in ``row``.
 
-X10CrMoVNb9-1 (T91/P91) is not given (asking for it raises ``KeyError`` saying so):
-the public data sheets found disagree by 25 % at room temperature (29.2 W/(m K) and
-460 J/(kg K); 33 W/(m K) and 620 J/(kg K); about 26 W/(m K)), and ASME II-D Table TCD
-(its source of record) is not public. Give the wall's C_wall and conductivity by hand.
+X10CrMoVNb9-1 (T91/P91, 9 Cr-1 Mo-V) has no row in Incropera's table either. Its
+numbers are those of the Woite Edelstahl data sheet for 1.4903
+(https://woite-edelstahl.info/14903de.html), as ClaRa quotes them
+(``ClaRa.Basics.Media.Solids.SteelX10CrMoVNb9_1``): lambda 26 W/(m K) at 20 degC
+rising linearly to 30 W/(m K) at 500 degC, c = 460 J/(kg K) (one value), rho = 7760
+kg/m3. Caution: public data sheets of this steel disagree (29.2 W/(m K) and 460
+J/(kg K) by one, 33 and 30 W/(m K) at 20 and 500 degC and 620 J/(kg K) by another);
+ASME II-D Table TCD, the source of record, is not public. A wall of P91 is known to
+about 15 % in lambda and 30 % in c; give C_wall and the conductivity by hand where
+that matters.
 """
 
 from __future__ import annotations
@@ -112,6 +118,14 @@ _ROWS = {
         (252.0, 356.0, 385.0, 397.0, 417.0, 433.0, 451.0, 480.0)),
 }  # fmt: skip
 
+#: 9 Cr-1 Mo-V (P91): the Woite data sheet as quoted by ClaRa (module docstring)
+_P91_ROW = "9 Cr-1 Mo-V: Woite Edelstahl data sheet 1.4903 (via ClaRa)"
+_P91_SOURCE = (
+    "Woite Edelstahl, data sheet 1.4903 (https://woite-edelstahl.info/14903de.html), as "
+    "in ClaRa's ClaRa.Basics.Media.Solids.SteelX10CrMoVNb9_1"
+)
+_ROWS[_P91_ROW] = (7760.0, (293.15, 773.15), (26.0, 30.0), (460.0, 460.0))
+
 #: 2 1/4 Cr-1 Mo (T22): lambda [W/(m K)] at 70 degF to 1500 degF in steps of 50 degF
 #: [K], from ORNL TRANSFORM's Cr225Mo1 (source OSTI 455553); c and rho: the 1 Cr-1/2 Mo
 #: row above (module docstring)
@@ -150,8 +164,11 @@ _NAMES = {
     "10CrMo9-10": _T22_ROW,
     "T22": _T22_ROW,
     "P22": _T22_ROW,
+    "X10CrMoVNb9-1": _P91_ROW,
+    "T91": _P91_ROW,
+    "P91": _P91_ROW,
 }
-_MISSING = {"X10CrMoVNb9-1", "T91", "P91"}
+_MISSING: set = set()  # names asked for whose source is missing (none at present)
 
 
 def _key(name: str) -> str:
@@ -186,4 +203,6 @@ def metal(name: str) -> Metal:
         rho, T, _, c = _ROWS["chromium (low) steel, 1 Cr-1/2 Mo"]
         return Metal(canon, row, rho, T, _T22_LAM, c, _T22_SOURCE, _T22_T)
     rho, T, lam, c = _ROWS[row]
+    if row == _P91_ROW:
+        return Metal(canon, row, rho, T, lam, c, _P91_SOURCE)
     return Metal(canon, row, rho, T, lam, c)
