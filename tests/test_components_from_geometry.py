@@ -20,6 +20,7 @@ import math
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -34,6 +35,7 @@ from dnasim.plantfile import load
 
 G = 9.80665
 WATER = get_medium("Water")
+ROOT_PLANTS = Path(__file__).resolve().parents[1] / "plants"
 
 
 def run_cli(tmp_path, name, text):
@@ -738,3 +740,47 @@ def test_clara_evaporator_reference_and_the_friction_from_geometry(tmp_path):
     # density")
     assert out["lumped", 573.15] - out["geometry", 573.15] == pytest.approx(0.37e5, abs=0.1e5)
     assert out["lumped", 873.15] - out["geometry", 873.15] == pytest.approx(4.3e5, abs=0.3e5)
+
+
+# ---------------------------------------------------------------- boiling front
+
+
+def test_evaporator_from_geometry_through_boiling_onset(tmp_path):
+    # plants/evaporator.toml written from geometry (20 tubes 32 x 4 mm of 16Mo3, 30 m,
+    # a staggered finned bank of 16 rows with gas radiation): the flue gas ramps from
+    # 560 K to 850 K, the water starts to boil at the outlet and the boiling front
+    # moves upstream through the sections, each crossing located (phase modes); the
+    # coefficients join at the saturation line (no chattering: tube_laws' doc)
+    text = (ROOT_PLANTS / "evaporator.toml").read_text().replace(
+        """hot_V = "40 m3"
+cold_V = "0.5 m3"
+hot_kA = "30 kW/K"
+cold_kA = "300 kW/K"
+hot_dp_nominal = "0.005 bar"
+cold_dp_nominal = "0.5 bar"
+C_wall = "2 MJ/K\"""",
+        """D = "32 mm"
+length = "30 m"
+n_tubes = 20
+wall_thickness = "4 mm"
+wall_material = "16Mo3"
+arrangement = "staggered"
+pitch_transverse = "90 mm"
+pitch_longitudinal = "80 mm"
+n_rows = 16
+fin_height = "12 mm"
+fin_thickness = "1 mm"
+fin_pitch = "6 mm"
+gas_radiation = true
+hot_dp_nominal = "0.005 bar\"""",
+    ).replace('t_end = "1200 s"', 't_end = "450 s"')
+    assert "arrangement" in text
+    run = run_cli(tmp_path, "evaporator_geometry", textwrap.dedent(text))
+    assert run.finished, run.message
+    b = balances(run)
+    assert b.mass_err < 1e-6 and b.energy_err < 1e-6, b
+    p, h = last(run, "w_out.p"), last(run, "w_out.h")
+    hl, hv = (float(v[0]) for v in WATER.saturation_enthalpies(np.array([p])))
+    assert (h - hl) / (hv - hl) > 0.5  # boiling through most of the tubes at the end
+    events = (tmp_path / "evaporator_geometry_out" / "events.csv").read_text()
+    assert events.count("saturated liquid") >= 5  # the front crossed the sections

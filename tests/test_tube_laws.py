@@ -123,14 +123,18 @@ def test_convection_inside_single_and_boiling():
     s = {key: v[0] for key, v in WATER.saturation_transport(p[:1]).items()}
     h_lv = s["h_v"] - s["h_l"]
 
+    # Chen's and Shah's liquid coefficients by the law's own single-phase Nu (VDI G1)
+    def nu(Re, Pr):
+        return heat_transfer.nusselt_tube(Re, Pr, 0.025 / 30.0, "T")
+
     def h_two(T_s):
         dT = T_s - s["T"]
         dps = boiling.clapeyron_dp_sat(dT, s["T"], 60e5, h_lv, s["rho_l"], s["rho_v"])
         hb = boiling.chen_boiling(G, 0.2, 0.025, s["rho_l"], s["rho_v"], s["mu_l"], s["mu_v"],
                                   s["k_l"], s["cp_l"], h_lv, s["sigma"], dT, dps, 0.9,
-                                  s["k_v"], s["cp_v"])  # fmt: skip
+                                  s["k_v"], s["cp_v"], nu)  # fmt: skip
         hc = condensation.shah_condensation(G, 0.2, 0.025, s["mu_l"], s["k_l"], s["cp_l"],
-                                            60e5 / 22.064e6)  # fmt: skip
+                                            60e5 / 22.064e6, nu)  # fmt: skip
         w = 0.5 * (1 + np.tanh(dT))
         return w * hb + (1 - w) * hc
 
@@ -142,6 +146,28 @@ def test_convection_inside_single_and_boiling():
         hh = h_two(T_s)
     assert UA[1] == pytest.approx(1 / (1 / (hh * A_vol) + R_in[1]), rel=1e-10)
     assert 2e4 < hh < 2e5  # nucleate boiling at 60 bar: tens of kW/(m2 K)
+
+
+def test_two_phase_coefficient_joins_the_single_phase_one_at_the_lines():
+    # at x = 0 (no wall superheat: no nucleate term) and at x = 1 the two-phase law
+    # gives the single-phase law's coefficient of the saturated liquid and vapour:
+    # a volume changing its phase mode sees no jump of h
+    t = Tubes(D=0.025, length=30.0, n_tubes=4)
+    law = TubeConvection(t, n=10, m_reg=0.0)
+    p = np.full(2, 60e5)
+    hl, hv = (float(v[0]) for v in WATER.saturation_enthalpies(p[:1]))
+    args = states(WATER, p, np.array([hl, hv]))
+    sat = WATER.saturation_transport(p[:1])
+    T_sat = float(sat["T"][0])
+    for branch in ([LIQUID, 3], [DOME, DOME]):
+        fp = FluidProperties(WATER, *args, branch=np.array(branch))
+        h, _ = law.h(np.array([2.0, 2.0]), np.array([T_sat, T_sat]), fp, np.arange(2))
+        if branch[0] == LIQUID:
+            single = h
+        else:
+            two = h
+    # saturated-line states from (p, h') and (p, h''): round-off of the property calls
+    np.testing.assert_allclose(two, single, rtol=1e-9)
 
 
 def test_bank_with_fins_and_gas_radiation():

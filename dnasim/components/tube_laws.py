@@ -48,7 +48,14 @@ volume's mean flow (m[i] + m[i+1])/2 regularised as above, A_i,vol = A_i/n):
     two phase      h = s h_Chen + (1 - s) h_Shah, s = (1 + tanh((T_s - T_sat)/1 K))/2:
                    flow boiling by Chen with the dry-out quality x_dryout (``boiling``),
                    dT_sat = T_s - T_sat, dp_sat by Clausius-Clapeyron
-                   (``boiling.clapeyron_dp_sat``); condensation by Shah 1979
+                   (``boiling.clapeyron_dp_sat``); condensation by Shah 1979; Chen's h_l
+                   (and vapour-only value) and Shah's h_lo by the single-phase Nu above
+                   instead of their Dittus-Boelter, so that at x = 0 h = h_single + S
+                   h_nb and at x = 1 the vapour's single-phase h: a volume changing its
+                   phase sees no drop of its coefficient (a drop at boiling onset makes
+                   the phase switch chatter: measured on an evaporator from geometry);
+                   Shah's, which vanishes at x = 1, blended linearly from x_dryout into
+                   the vapour's single-phase h (as Chen's after dry-out)
     mixed          h = (1 - w2) h_single + w2 h_two
     conductance    UA_i = 1 / (1/(h A_i,vol) + R_in,vol(lambda(T_w)))
 
@@ -152,14 +159,27 @@ class ArrayMemo:
 
 
 class PropertyMemos:
-    """The ``ArrayMemo`` of each property call of one channel's states, for one medium."""
+    """The ``ArrayMemo`` of each property call of one channel's states, for one medium.
+    Pickles as its medium alone (the memos start empty again)."""
 
     def __init__(self, medium):
         self.medium = medium
-        self.saturation = ArrayMemo(lambda p: saturation_enthalpies(medium, p))
-        self.transport = ArrayMemo(lambda p, h: medium.transport(p, h, check=False))
+        self.saturation = ArrayMemo(self._saturation)
+        self.transport = ArrayMemo(self._transport)
         self.sat_transport = ArrayMemo(medium.saturation_transport)
         self.condensable = is_condensable(medium)
+
+    def _saturation(self, p):
+        return saturation_enthalpies(self.medium, p)
+
+    def _transport(self, p, h):
+        return self.medium.transport(p, h, check=False)
+
+    def __getstate__(self):
+        return {"medium": self.medium}
+
+    def __setstate__(self, state):
+        self.__init__(state["medium"])
 
 
 def _smoothstep(t):
@@ -336,15 +356,34 @@ class TubeConvection:
             Nu = nusselt_tube(Re, Pr, self.d_over_L, "T")
         return Nu * k / self.D
 
+    def _nusselt(self, Re, Pr):
+        """The single-phase Nu(Re, Pr) of this law, for Chen's h_l and Shah's h_lo: the
+        two-phase coefficients then join the single-phase one at x = 0 and 1."""
+        if self.dittus:
+            return 0.023 * Re**0.8 * Pr**0.4
+        return nusselt_tube(Re, Pr, self.d_over_L, "T")
+
     def _h_two(self, G, x, sat, p, p_critical, T_s):
         dT = T_s - sat["T"]
         dp_sat = clapeyron_dp_sat(dT, sat["T"], p, sat["h_lv"], sat["rho_l"], sat["rho_v"])
-        h_b = chen_boiling(
-            G, x, self.D, sat["rho_l"], sat["rho_v"], sat["mu_l"], sat["mu_v"], sat["k_l"],
-            sat["cp_l"], sat["h_lv"], sat["sigma"], dT, dp_sat, self.x_dryout, sat["k_v"],
-            sat["cp_v"],
-        )  # fmt: skip
-        h_c = shah_condensation(G, x, self.D, sat["mu_l"], sat["k_l"], sat["cp_l"], p / p_critical)
+        args = (G, x, self.D, sat["rho_l"], sat["rho_v"], sat["mu_l"], sat["mu_v"], sat["k_l"],
+                sat["cp_l"], sat["h_lv"], sat["sigma"])  # fmt: skip
+        tail = (self.x_dryout, sat["k_v"], sat["cp_v"], self._nusselt)
+        h_b = chen_boiling(*args, dT, dp_sat, *tail)
+        # the nucleate term S h_nb fades in over the first X_BAND of quality: at x = 0
+        # Chen's coefficient is the liquid's, whatever the wall superheat (no jump
+        # where a volume enters the dome; subcooled boiling is not modelled)
+        h_conv = chen_boiling(*args, 0.0, 0.0, *tail)
+        h_b = h_conv + _smoothstep(x / X_BAND) * (h_b - h_conv)
+        # Shah's coefficient vanishes at x = 1 (the film's formula): above x_dryout it is
+        # blended linearly into the vapour's single-phase one, as Chen's after dry-out
+        xc = self.x_dryout
+        h_c = shah_condensation(G, np.minimum(x, xc), self.D, sat["mu_l"], sat["k_l"], sat["cp_l"],
+                                p / p_critical, self._nusselt)  # fmt: skip
+        h_v = self._nusselt(G * self.D / sat["mu_v"], sat["mu_v"] * sat["cp_v"] / sat["k_v"])
+        h_v = h_v * sat["k_v"] / self.D
+        w = np.clip((x - xc) / max(1.0 - xc, 1e-12), 0.0, 1.0)
+        h_c = (1.0 - w) * h_c + w * h_v
         s = 0.5 * (1.0 + np.tanh(dT / DT_BLEND))
         return s * h_b + (1.0 - s) * h_c
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def shah_condensation(G, x, D, mu_l, k_l, cp_l, p_reduced):
+def shah_condensation(G, x, D, mu_l, k_l, cp_l, p_reduced, nusselt=None):
     """Condensation coefficient h [W/(m2 K)] inside tubes by Shah (Int. J. Heat Mass
     Transfer 22, 547 (1979)):
 
@@ -18,12 +18,18 @@ def shah_condensation(G, x, D, mu_l, k_l, cp_l, p_reduced):
     vertical and inclined tubes); mean deviation about 15 %. Outside it the formula is
     evaluated as written (x clipped to [0, 1]; at x = 0 it is the liquid-only
     coefficient). G [kg/(m2 s)] (|G| used), D [m], mu_l [Pa s], k_l [W/(m K)],
-    cp_l [J/(kg K)], p_reduced [-].
+    cp_l [J/(kg K)], p_reduced [-]. ``nusselt``: a function Nu(Re, Pr) for h_lo instead
+    of Shah's Dittus-Boelter (a component's single-phase correlation, so that the
+    coefficient joins it at x = 0).
     """
     G = np.abs(np.asarray(G, dtype=float))
     x = np.clip(np.asarray(x, dtype=float), 0.0, 1.0)
     Re = G * D / mu_l
-    h_lo = 0.023 * Re**0.8 * (mu_l * cp_l / k_l) ** 0.4 * k_l / D
+    Pr = mu_l * cp_l / k_l
+    if nusselt is None:
+        h_lo = 0.023 * Re**0.8 * Pr**0.4 * k_l / D
+    else:
+        h_lo = nusselt(Re, Pr) * k_l / D
     return h_lo * ((1.0 - x) ** 0.8 + 3.8 * x**0.76 * (1.0 - x) ** 0.04 / p_reduced**0.38)
 
 
