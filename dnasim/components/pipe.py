@@ -84,7 +84,9 @@ class Pipe(Component):
     """
 
     PARAMS = (
-        Param("V", "m3", None, "fluid volume (lumped form; from geometry: computed)", min=0.0),
+        Param(
+            "V", "m3", None, "fluid volume: required, unless D is given (then computed)", min=0.0
+        ),
         Param("kA", "W/K", 0.0, "heat transfer coefficient times area, fluid to wall", min=0.0),
         Param("k", "1/m4", 0.0, "friction coefficient: dp = k m|m|/rho", min=0.0),
         Param("dz", "m", 0.0, "height of outlet above inlet"),
@@ -329,8 +331,8 @@ class Pipe(Component):
                         )
         elif P["V"] is None:
             raise PlantError(
-                f"component '{name}': give the fluid volume V [m3] (lumped pipe) or the tubes' "
-                "inner diameter D and length (pipe from geometry)"
+                f"component '{name}' (Pipe): parameter 'V' [m3] is required (fluid volume), "
+                "unless the pipe is given by geometry: the tubes' inner diameter D and length"
             )
         self.friction = P["friction"] or ("colebrook" if geo else "lumped")
         has_wall = (
