@@ -165,6 +165,8 @@ class PropertyMemos:
     def __init__(self, medium):
         self.medium = medium
         self.saturation = ArrayMemo(self._saturation)
+        #: the same for a subset of the states (its size changes with the phase modes)
+        self.saturation_some = ArrayMemo(self._saturation)
         self.transport = ArrayMemo(self._transport)
         self.sat_transport = ArrayMemo(medium.saturation_transport)
         self.condensable = is_condensable(medium)
@@ -209,9 +211,21 @@ class FluidProperties:
         self.x = np.full(n, np.nan)
         self.w2 = np.zeros(n)
         if not memos.condensable:
-            self.mu, self.k, self.cp = self._single_phase(medium, memos, p, h, np.ones(n, bool))
+            t = memos.transport(p, h)
+            self.mu, self.k, self.cp = self._single_phase(medium, t, p, h, np.ones(n, bool))
             return
-        hl, hv = memos.saturation(p)
+        t = memos.transport(p, h)
+        if branch is None:  # the quality of every state
+            hl, hv = memos.saturation(p)
+        else:
+            # with phase modes only the states in the dome mode, the nodes (no mode) and
+            # the states the single-phase call refuses (inside the dome) need it
+            branch = np.asarray(branch)
+            finite = np.isfinite(t["mu"]) & np.isfinite(t["k"]) & np.isfinite(t["cp"])
+            sel = np.flatnonzero((branch == DOME) | (branch == AUTO) | ~finite)
+            hl, hv = np.full(n, np.nan), np.full(n, np.nan)
+            if sel.size:
+                hl[sel], hv[sel] = memos.saturation_some(p[sel])
         sub = np.isfinite(hl) & np.isfinite(hv)
         x = np.where(sub, (h - hl) / np.where(sub, hv - hl, 1.0), np.nan)
         self.x = x
@@ -220,17 +234,16 @@ class FluidProperties:
         if branch is None:
             w2 = ramp
         else:
-            branch = np.asarray(branch)
             w2 = np.where(branch == DOME, 1.0, np.where(branch == AUTO, ramp, 0.0))
             w2 = np.where(sub, w2, 0.0)
         self.w2 = w2
-        mu, k, cp = self._single_phase(medium, memos, p, h, ~inside)
+        mu, k, cp = self._single_phase(medium, t, p, h, ~inside)
         need = sub & (inside | (w2 > 0.0))
         if need.any():
-            # every subcritical state's (remembered per point): the states needing them
-            # change from call to call, the pressures little
-            s = memos.sat_transport(np.where(sub, p, 1e5))
-            sat = {key: np.where(sub, s[key], np.nan) for key in _SAT_KEYS}
+            s = memos.sat_transport(p[need])  # remembered per point
+            sat = {key: np.full(n, np.nan) for key in _SAT_KEYS}
+            for key in _SAT_KEYS:
+                sat[key][need] = s[key]
             sat["h_lv"] = sat["h_v"] - sat["h_l"]
             self.sat = sat
             if inside.any():  # single-phase values inside the dome: the saturated phase's
@@ -243,10 +256,9 @@ class FluidProperties:
         self.mu, self.k, self.cp = mu, k, cp
 
     @staticmethod
-    def _single_phase(medium, memos, p, h, single):
-        """(mu, k, cp) of the states (NaN inside the dome); the medium's PropertyError
-        for a single-phase state it cannot evaluate."""
-        t = memos.transport(p, h)
+    def _single_phase(medium, t, p, h, single):
+        """(mu, k, cp) of the states from the transport call's dict t (NaN inside the
+        dome); the medium's PropertyError for a single-phase state it cannot evaluate."""
         mu, k, cp = t["mu"].copy(), t["k"].copy(), t["cp"].copy()
         bad = single & ~(np.isfinite(mu) & np.isfinite(k) & np.isfinite(cp))
         if bad.any():  # raises the medium's own message for the first bad state
