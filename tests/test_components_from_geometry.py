@@ -140,8 +140,9 @@ def test_heated_tube_pressure_drop_single_phase(heated):
     dp = p[0] - p[-1]
     # the run uses |m| regularised by m_reg = 1 % of m_nominal: dp ~ m m_r^0.75 is
     # (m_reg/m)^2 0.75/2 ~ 4e-5 higher; the face sums otherwise equal to round-off
+    print("heated tube: friction run/hand - 1 =", (dp - dp_head) / dp_f - 1)
     assert dp - dp_head == pytest.approx(dp_f, rel=1e-4)
-    assert dp_f > 0.2 * dp  # the friction is a real share of the drop here (about 40 %)
+    assert dp_f > 0.3 * dp  # the friction is a real share of the drop here (60 %)
     # the engineer's estimate: mean properties (CoolProp's IAPWS, independent of
     # dnasim's transport code) at the mean of the inlet and outlet temperatures,
     # f from Colebrook at the mean Re, and the static head of the mean density. The
@@ -156,6 +157,7 @@ def test_heated_tube_pressure_drop_single_phase(heated):
     w = m / nt / (rho * A)
     f = float(friction.colebrook(rho * w * D / mu, 4.5e-5 / D))
     estimate = f * L / D * rho * w * w / 2 + rho * G * dz
+    print("heated tube: dp run/estimate - 1 =", dp / estimate - 1, "friction share", dp_f / dp)
     assert dp == pytest.approx(estimate, rel=0.01)
 
 
@@ -164,7 +166,7 @@ def test_heated_tube_outlet_temperature_from_gnielinski(heated):
     # Gnielinski's (VDI G1) h on the inner surface and the wall's inner half at
     # lambda(T_wall), at the mean bulk temperature; the run's UA varies along the tube
     # with the water's properties (k, mu, Pr: about +-3 % in h), which bends the
-    # temperature profile but moves the outlet by < 0.2 K (measured 0.05 K)
+    # temperature profile but moves the outlet by < 0.2 K (measured 0.002 K)
     run = heated
     m, D, L, nt, s = 3.0, 0.02, 50.0, 5, 0.003
     T_in, T_out, T_w = last(run, "a.T"), last(run, "b.T"), 473.15
@@ -180,6 +182,7 @@ def test_heated_tube_outlet_temperature_from_gnielinski(heated):
     # cp of the bulk between inlet and outlet, by the enthalpy rise (the exact mean)
     cp_m = (last(run, "b.h") - last(run, "a.h")) / (T_out - T_in)
     T_hand = T_w - (T_w - T_in) * math.exp(-UA / (m * cp_m))
+    print("heated tube: T_out run - hand =", T_out - T_hand, "K")
     assert T_out == pytest.approx(T_hand, abs=0.2)
     assert -last(run, "tube.Q_total") == pytest.approx(m * (last(run, "b.h") - last(run, "a.h")), rel=1e-6)
 
@@ -257,6 +260,8 @@ def test_boiling_tube_pressure_drop(boiling, law):
         dp_f += face_friction(m, p[i], h[i], D, L / n, nt, 4.5e-5, law)
         dp_head += WATER.state(p[i], h[i]).rho * G * L / n
     # as the single-phase case: the run's m_reg changes the friction by < 1e-4
+    print("boiling", law, "friction run/hand - 1 =", (p[0] - p[-1] - dp_head) / dp_f - 1,
+          "dp", (p[0] - p[-1]) / 1e5, "bar")  # fmt: skip
     assert p[0] - p[-1] - dp_head == pytest.approx(dp_f, rel=1e-4)
 
 
@@ -509,6 +514,7 @@ def test_condenser_duty_from_geometry(tmp_path):
         dT_f = Q_hand / UA * R_c * UA
     # the run regularises the film difference (sqrt(dT^2 + 0.01 K^2): 0.05 % at 2 K)
     # and the flow (m_reg = 1 % of cw_m_nominal in NTU: 1e-4 at 700 kg/s): 5e-4
+    print("condenser: Q run/hand - 1 =", Q / Q_hand - 1, "U =", UA / A_o, "W/(m2 K)")
     assert Q == pytest.approx(Q_hand, rel=5e-4)
     assert last(run, "condenser.UA") == pytest.approx(UA, rel=5e-4)
     # a clean condenser's overall coefficient (HEI design values 2.5 to 4 kW/(m2 K))
@@ -575,9 +581,11 @@ def test_lumped_form_is_the_limit(tmp_path):
     assert lumped.returncode == 0, lumped.message
     # the water's properties change by < 0.1 % over the 1 K: outlet temperature and
     # pressure drop agree to that share of the heating (1 K) and of the drop
+    print("limit: T_out geo - lumped =", last(geo, "b.T") - last(lumped, "b.T"))
     assert last(geo, "b.T") == pytest.approx(last(lumped, "b.T"), abs=2e-3)
     dp_g = last(geo, "a.p") - last(geo, "b.p")
     dp_l = last(lumped, "a.p") - last(lumped, "b.p")
+    print("limit: dp geo/lumped - 1 =", dp_g / dp_l - 1)
     assert dp_g == pytest.approx(dp_l, rel=2e-3)
 
 
@@ -732,6 +740,8 @@ def test_clara_evaporator_reference_and_the_friction_from_geometry(tmp_path):
     # 0.01 bar in liquid, 0.12 bar after the wall heats the steam to 540 degC (TILMedia's
     # steel conductivity is not published with the test; 50 W/(m K) here): 0.2 bar
     for T, ref in CLARA_INLET_P.items():
+        print("ClaRa", T, "ref", ref / 1e5, "lumped", out["lumped", T] / 1e5,
+              "geometry", out["geometry", T] / 1e5)  # fmt: skip
         assert out["lumped", T] == pytest.approx(ref, abs=0.2e5)
     # from geometry, Darcy-Weisbach with Colebrook (and Friedel through the dome) gives
     # the friction of the actual flow: 0.37 bar less in liquid (the nominal point's
