@@ -73,8 +73,12 @@ def face_friction(m, p, h, D, L_face, n_tubes, roughness, two_phase="friedel"):
         rl, rv = float(s["rho_l"][0]), float(s["rho_v"][0])
         ml, mv, sig = float(s["mu_l"][0]), float(s["mu_v"][0]), float(s["sigma"][0])
         if two_phase == "friedel":
-            return float(friction.friedel_pressure_drop(mt, x, rl, rv, ml, mv, sig, D, L_face, roughness))
-        return float(friction.homogeneous_pressure_drop(mt, x, rl, rv, ml, mv, D, L_face, roughness))
+            return float(
+                friction.friedel_pressure_drop(mt, x, rl, rv, ml, mv, sig, D, L_face, roughness)
+            )
+        return float(
+            friction.homogeneous_pressure_drop(mt, x, rl, rv, ml, mv, D, L_face, roughness)
+        )
     mu = float(WATER.transport(np.array([p]), np.array([h]))["mu"][0])
     return float(friction.pressure_drop(mt, st.rho, mu, D, L_face, roughness))
 
@@ -184,7 +188,9 @@ def test_heated_tube_outlet_temperature_from_gnielinski(heated):
     T_hand = T_w - (T_w - T_in) * math.exp(-UA / (m * cp_m))
     print("heated tube: T_out run - hand =", T_out - T_hand, "K")
     assert T_out == pytest.approx(T_hand, abs=0.2)
-    assert -last(run, "tube.Q_total") == pytest.approx(m * (last(run, "b.h") - last(run, "a.h")), rel=1e-6)
+    assert -last(run, "tube.Q_total") == pytest.approx(
+        m * (last(run, "b.h") - last(run, "a.h")), rel=1e-6
+    )
 
 
 # ---------------------------------------------------------------- boiling
@@ -235,8 +241,11 @@ BOILING_TUBE = """
 def boiling(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("boiling")
     return {
-        law: run_cli(tmp, f"boiling_{law}", BOILING_TUBE.replace(
-            "TWO_PHASE", f'two_phase_friction = "{law}"'))  # fmt: skip
+        law: run_cli(
+            tmp,
+            f"boiling_{law}",
+            BOILING_TUBE.replace("TWO_PHASE", f'two_phase_friction = "{law}"'),
+        )  # fmt: skip
         for law in ("friedel", "homogeneous")
     }
 
@@ -250,7 +259,9 @@ def test_boiling_tube_pressure_drop(boiling, law):
     # rises linearly, h_i = h_in + (i + 1) Q/(n m) (exactly: the steady energy balance)
     h_in = last(run, "a.h")
     for i in range(n):
-        assert last(run, f"riser.h_v[{i}]") == pytest.approx(h_in + (i + 1) * 2e6 / (n * m), rel=1e-8)
+        assert last(run, f"riser.h_v[{i}]") == pytest.approx(
+            h_in + (i + 1) * 2e6 / (n * m), rel=1e-8
+        )
     p = [last(run, "a.p")] + [last(run, f"riser.p_v[{i}]") for i in range(n)]
     h = [h_in] + [last(run, f"riser.h_v[{i}]") for i in range(n)]
     x_out = WATER.state(p[-1], h[-1]).quality
@@ -377,11 +388,15 @@ def test_economiser_outlet_from_epsilon_ntu(economiser):
     mu_g, k_g, cp_g = (float(trg[key][0]) for key in ("mu", "k", "cp"))
     V_max = float(tube_banks.max_velocity(1.0, bank.D_o, bank.S_T, bank.S_L, True))
     Re_g = m_g / bank.A_front * V_max * bank.D_o / mu_g
-    Nu_g = float(tube_banks.nusselt_zukauskas(Re_g, mu_g * cp_g / k_g, 50, bank.S_T, bank.S_L, True))
+    Nu_g = float(
+        tube_banks.nusselt_zukauskas(Re_g, mu_g * cp_g / k_g, 50, bank.S_T, bank.S_L, True)
+    )
     h_o = Nu_g * k_g / bank.D_o
     T_wall = 0.5 * (Tg_m + 0.5 * (Tw_in + Tw_out))
     lam = float(tubes.metal.conductivity(T_wall))
-    UA = 1.0 / (1.0 / (h_i * tubes.A_inner) + tubes.conduction_resistance(lam) + 1.0 / (h_o * tubes.A_outer))
+    UA = 1.0 / (
+        1.0 / (h_i * tubes.A_inner) + tubes.conduction_resistance(lam) + 1.0 / (h_o * tubes.A_outer)
+    )
     C_min, C_max = min(C_w, C_g), max(C_w, C_g)
     ntu, cr = UA / C_min, C_min / C_max
     eps = (1 - math.exp(-ntu * (1 - cr))) / (1 - cr * math.exp(-ntu * (1 - cr)))
@@ -562,7 +577,9 @@ def test_lumped_form_is_the_limit(tmp_path):
     # lumped pipe with those numbers is the same equations. The geometry here: 2
     # tubes of 25 mm, 20 m, no wall thickness (no conduction), water at 50 degC
     # heated by 1 K
-    geo = run_cli(tmp_path, "geo", LIMIT.replace("TUBE", 'D = "25 mm"\nlength = "20 m"\nn_tubes = 2'))
+    geo = run_cli(
+        tmp_path, "geo", LIMIT.replace("TUBE", 'D = "25 mm"\nlength = "20 m"\nn_tubes = 2')
+    )
     assert geo.returncode == 0, geo.message
     D, L, nt, n, m = 0.025, 20.0, 2, 10, 4.0
     p = [last(geo, "a.p")] + [last(geo, f"tube.p_v[{i}]") for i in range(n)]
@@ -572,7 +589,15 @@ def test_lumped_form_is_the_limit(tmp_path):
     tr = WATER.transport(np.array([pm]), np.array([hm]))
     mu, kc, cp = (float(tr[key][0]) for key in ("mu", "k", "cp"))
     Re = m / nt / (math.pi * D * D / 4) * D / mu
-    UA = float(heat_transfer.nusselt_tube(Re, mu * cp / kc, D / L, "T")) * kc / D * nt * math.pi * D * L
+    UA = (
+        float(heat_transfer.nusselt_tube(Re, mu * cp / kc, D / L, "T"))
+        * kc
+        / D
+        * nt
+        * math.pi
+        * D
+        * L
+    )
     rho = WATER.state(pm, hm).rho
     k = float(friction.pressure_drop(m / nt, rho, mu, D, L, 4.5e-5)) * rho / m**2
     V = nt * math.pi * D * D / 4 * L
@@ -625,10 +650,13 @@ REVERSAL = """
     ports = { inlet = "b", outlet = "c" }
     [components.back]
     type = "PressureBoundary"
-    p = { type = "table", times = ["0 s", "20 s", "80 s", "120 s", "160 s", "200 s"], values = ["4.5 bar", "4.5 bar", "5.5 bar", "5.5 bar", "5 bar", "5 bar"] }
     T = "20 degC"
     m_nominal = "10 kg/s"
     ports = { port = "c" }
+    [components.back.p]
+    type = "table"
+    times = ["0 s", "20 s", "80 s", "120 s", "160 s", "200 s"]
+    values = ["4.5 bar", "4.5 bar", "5.5 bar", "5.5 bar", "5 bar", "5 bar"]
 """
 
 
@@ -654,7 +682,7 @@ def test_flow_reversal_and_zero_flow_through_a_geometry_pipe(tmp_path):
     "extra, words",
     [
         ('V = "0.1 m3"', "'V' follows from the geometry"),
-        ('k = 1000', "two models of one thing"),
+        ("k = 1000", "two models of one thing"),
         ('kA = "10 kW/K"', "two models of one thing"),
         ('C_wall = "1 MJ/K"', "'C_wall' follows from wall_thickness"),
     ],
@@ -761,15 +789,18 @@ def test_evaporator_from_geometry_through_boiling_onset(tmp_path):
     # 560 K to 850 K, the water starts to boil at the outlet and the boiling front
     # moves upstream through the sections, each crossing located (phase modes); the
     # coefficients join at the saturation line (no chattering: tube_laws' doc)
-    text = (ROOT_PLANTS / "evaporator.toml").read_text().replace(
-        """hot_V = "40 m3"
+    text = (
+        (ROOT_PLANTS / "evaporator.toml")
+        .read_text()
+        .replace(
+            """hot_V = "40 m3"
 cold_V = "0.5 m3"
 hot_kA = "30 kW/K"
 cold_kA = "300 kW/K"
 hot_dp_nominal = "0.005 bar"
 cold_dp_nominal = "0.5 bar"
 C_wall = "2 MJ/K\"""",
-        """D = "32 mm"
+            """D = "32 mm"
 length = "30 m"
 n_tubes = 20
 wall_thickness = "4 mm"
@@ -783,7 +814,9 @@ fin_thickness = "1 mm"
 fin_pitch = "6 mm"
 gas_radiation = true
 hot_dp_nominal = "0.005 bar\"""",
-    ).replace('t_end = "1200 s"', 't_end = "450 s"')
+        )
+        .replace('t_end = "1200 s"', 't_end = "450 s"')
+    )
     assert "arrangement" in text
     run = run_cli(tmp_path, "evaporator_geometry", textwrap.dedent(text))
     assert run.finished, run.message

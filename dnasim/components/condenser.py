@@ -210,7 +210,9 @@ class Condenser(Component):
             # the water's path: n_tubes/n_passes tubes in parallel, n_passes lengths long
             self.path = Tubes(t.D, P["n_passes"] * t.length, t.n_tubes / P["n_passes"],
                               t.wall_thickness, t.metal, t.roughness)  # fmt: skip
-            self.cw_friction = TubeFriction(self.path, 1, P["friction"], "homogeneous", self.m_reg_w)
+            self.cw_friction = TubeFriction(
+                self.path, 1, P["friction"], "homogeneous", self.m_reg_w
+            )
             self.cw_convection = TubeConvection(
                 self.path, 1, P["convection"], m_reg=self.m_reg_w, wall_resistance=False
             )
@@ -484,9 +486,7 @@ class Condenser(Component):
             if k is None:
                 k = P["cw_dp_nominal"] * s1.rho / P["cw_m_nominal"] ** 2
             rho_w = s1.rho if x["m_w"] >= 0 else s2.rho
-            work.update(
-                s1=s1, UA=P["UA"], cw_dp=friction_dp(k, x["m_w"], rho_w, self.m_reg_w)
-            )
+            work.update(s1=s1, UA=P["UA"], cw_dp=friction_dp(k, x["m_w"], rho_w, self.m_reg_w))
         return work
 
     def water_heating(self, mw, s1, T_sat, UA=None):

@@ -201,8 +201,9 @@ class HeatExchanger(Component):
             kind="string",
             choices=("lumped", "gnielinski", "dittus_boelter"),
         ),
-        Param("x_dryout", "1", 0.9, "critical quality of Chen's boiling (geometry)", min=0.0,
-              max=1.0),  # fmt: skip
+        Param(
+            "x_dryout", "1", 0.9, "critical quality of Chen's boiling (geometry)", min=0.0, max=1.0
+        ),  # fmt: skip
         Param(
             "arrangement",
             "1",
@@ -238,8 +239,14 @@ class HeatExchanger(Component):
             "bank: add the gas's radiation to the tubes (WSGG; a FlueGas mixture)",
             kind="bool",
         ),
-        Param("wall_emissivity", "1", 0.8, "bank: emissivity of the tubes (radiation)", min=0.0,
-              max=1.0),  # fmt: skip
+        Param(
+            "wall_emissivity",
+            "1",
+            0.8,
+            "bank: emissivity of the tubes (radiation)",
+            min=0.0,
+            max=1.0,
+        ),  # fmt: skip
         Param("beam_length", "m", None, "bank: mean beam length (default 3.6 V_gas/A_o)", min=0.0),
         Param("hot_T0", "K", None, "initial hot fluid temperature (given start)", min=0.0),
         Param("cold_T0", "K", None, "initial cold fluid temperature (given start)", min=0.0),
@@ -440,7 +447,9 @@ class HeatExchanger(Component):
         if side == self.tube_side and self.tubes is not None:
             friction = heat = None
             if self.friction != "lumped":
-                friction = TubeFriction(self.tubes, n, self.friction, P["two_phase_friction"], m_reg)
+                friction = TubeFriction(
+                    self.tubes, n, self.friction, P["two_phase_friction"], m_reg
+                )
             if self.convection != "lumped":
                 heat = TubeConvection(self.tubes, n, self.convection, P["x_dryout"], m_reg)
             if friction is None and heat is None:
@@ -554,7 +563,8 @@ class HeatExchanger(Component):
             M_nom = self.V[side] / self.n * 1e-3
             kA = self.params[f"{side}_kA"]
             if kA is None:  # from geometry: a scale only, 1000 inside, 50 W/(m2 K) outside
-                kA = 1000.0 * self.tubes.A_inner if side == self.tube_side else 50.0 * self.bank.A_out
+                tube = side == self.tube_side
+                kA = 1000.0 * self.tubes.A_inner if tube else 50.0 * self.bank.A_out
             if side == self.bank_side and self.bank is not None:
                 ch.laws.heat.check_medium(self.side_medium(side), self.name)
             out += ch.variables(
@@ -581,8 +591,10 @@ class HeatExchanger(Component):
                     doc=f"({metals}) dT_w[i]/dt = hot_Q[i] + cold_Q[j(i)]"
                     " (j(i) = n-1-i counter-flow, i parallel-flow)",
                     unit="W",
-                    residual=lambda t, x, xp: self.wall_capacity(x["T_w"]) * xp["T_w"]
-                    - (x["hot_Q"] + x["cold_Q"][cold_wall]),
+                    residual=lambda t, x, xp: (
+                        self.wall_capacity(x["T_w"]) * xp["T_w"]
+                        - (x["hot_Q"] + x["cold_Q"][cold_wall])
+                    ),
                 )
             )
             return eqs

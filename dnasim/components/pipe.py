@@ -239,7 +239,8 @@ class Pipe(Component):
         if self.V <= 0:
             raise PlantError(f"component '{self.name}': parameter 'V' must be > 0 m3")
         #: the wall's metal (geometry with wall_thickness and wall_material), or None
-        self.wall_metal = self.tubes.metal if self.tubes is not None and self.tubes.has_wall else None
+        walled = self.tubes is not None and self.tubes.has_wall
+        self.wall_metal = self.tubes.metal if walled else None
         self.wall_model = None
         if P["wall_layers"] or any(P[k] is not None for k in ("T_outer", "kA_outer", "Q_outer")):
             if P["T_wall"] is not None:
@@ -320,7 +321,8 @@ class Pipe(Component):
                 if P[key] is not None:
                     raise PlantError(
                         f"component '{name}': '{key}' follows from the geometry (D, length, "
-                        f"n_tubes, wall_thickness): leave it out, or leave out D for the lumped pipe"
+                        "n_tubes, wall_thickness): leave it out, or leave out D for the lumped "
+                        "pipe"
                     )
             if self.tubes.has_wall:
                 for key, default in (("C_wall", 0.0), ("wall_conductivity", None)):
@@ -500,8 +502,9 @@ class Pipe(Component):
                     yp=lambda i: (f"T_w[{i}]",),
                     doc=f"{m_i:g} c(T_w[i]) dT_w[i]/dt = Q[i] ({metal.name})",
                     unit="W",
-                    residual=lambda t, x, xp: m_i * metal.heat_capacity(x["T_w"]) * xp["T_w"]
-                    - x["Q"],
+                    residual=lambda t, x, xp: (
+                        m_i * metal.heat_capacity(x["T_w"]) * xp["T_w"] - x["Q"]
+                    ),
                 )
             )
         elif self.no_wall:

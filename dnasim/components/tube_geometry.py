@@ -106,12 +106,14 @@ class Tubes:
         """Mass of the tube walls [kg] (0 without a wall)."""
         if not self.has_wall:
             return 0.0
-        return self.metal.rho * self.n_tubes * math.pi / 4.0 * (self.D_out**2 - self.D**2) * self.length
+        ring = math.pi / 4.0 * (self.D_out**2 - self.D**2)
+        return self.metal.rho * self.n_tubes * ring * self.length
 
     def _log_ratio(self, part: str) -> float:
         r_i, r_o = self.D / 2.0, self.D_out / 2.0
         r_m = 0.5 * (r_i + r_o)
-        return {"inner": math.log(r_m / r_i), "outer": math.log(r_o / r_m), "whole": math.log(r_o / r_i)}[part]
+        ratio = {"inner": r_m / r_i, "outer": r_o / r_m, "whole": r_o / r_i}[part]
+        return math.log(ratio)
 
     def conduction_resistance(self, lam, part: str = "whole"):
         """Steady conduction resistance [K/W] of the tube walls (all tubes, whole length)

@@ -112,7 +112,9 @@ X_BAND = 0.01
 #: [K] temperature width of the heating/cooling blends (Dittus-Boelter's n, Chen/Shah)
 DT_BLEND = 1.0
 
-_SAT_KEYS = ("T", "rho_l", "rho_v", "h_l", "h_v", "mu_l", "mu_v", "k_l", "k_v", "cp_l", "cp_v", "sigma")
+_SAT_KEYS = (
+    "T", "rho_l", "rho_v", "h_l", "h_v", "mu_l", "mu_v", "k_l", "k_v", "cp_l", "cp_v", "sigma"
+)  # fmt: skip
 
 
 class ArrayMemo:
@@ -326,7 +328,8 @@ class TubeFriction:
         alpha = void_fraction_zivi(x, s["rho_l"][two], s["rho_v"][two])
         out = rho.copy()
         w = fp.w2[two]
-        out[two] = (1.0 - w) * rho[two] + w * mixture_density(alpha, s["rho_l"][two], s["rho_v"][two])
+        rho_m = mixture_density(alpha, s["rho_l"][two], s["rho_v"][two])
+        out[two] = (1.0 - w) * rho[two] + w * rho_m
         return out
 
 

@@ -148,7 +148,8 @@ def friedel_multiplier(G, x, rho_l, rho_v, mu_l, mu_v, sigma, D, roughness=0.0, 
     G = np.abs(np.asarray(G, dtype=float))
     eps = roughness / np.asarray(D, dtype=float)
     f_lo = darcy_friction_Re(G * D / mu_l, eps, turbulent) * mu_l
-    f_vo = darcy_friction_Re(G * D / mu_v, eps, turbulent) * mu_v  # both times G D: the ratio is f_vo/f_lo
+    # both times G D: the ratio is f_vo/f_lo
+    f_vo = darcy_friction_Re(G * D / mu_v, eps, turbulent) * mu_v
     E = (1.0 - x) ** 2 + x * x * rho_l * f_vo / (rho_v * f_lo)
     F = x**0.78 * (1.0 - x) ** 0.224
     H = (rho_l / rho_v) ** 0.91 * (mu_v / mu_l) ** 0.19 * (1.0 - mu_v / mu_l) ** 0.7

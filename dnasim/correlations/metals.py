@@ -84,7 +84,8 @@ class Metal:
         Tk = np.asarray(self.T, dtype=float)
         ck = np.asarray(self.c, dtype=float)
         # e at the table's points: c(T_0) T_0, then the trapezoids (exact for linear c)
-        ek = ck[0] * Tk[0] + np.concatenate(([0.0], np.cumsum(0.5 * (ck[1:] + ck[:-1]) * np.diff(Tk))))
+        steps = 0.5 * (ck[1:] + ck[:-1]) * np.diff(Tk)
+        ek = ck[0] * Tk[0] + np.concatenate(([0.0], np.cumsum(steps)))
         j = np.clip(np.searchsorted(Tk, T, side="right") - 1, 0, len(Tk) - 1)
         dT = T - Tk[j]
         slope = np.append(np.diff(ck) / np.diff(Tk), 0.0)[j]
@@ -129,7 +130,7 @@ _ROWS[_P91_ROW] = (7760.0, (293.15, 773.15), (26.0, 30.0), (460.0, 460.0))
 #: 2 1/4 Cr-1 Mo (T22): lambda [W/(m K)] at 70 degF to 1500 degF in steps of 50 degF
 #: [K], from ORNL TRANSFORM's Cr225Mo1 (source OSTI 455553); c and rho: the 1 Cr-1/2 Mo
 #: row above (module docstring)
-_T22_ROW = "2 1/4 Cr-1 Mo: lambda from OSTI 455553 (via ORNL TRANSFORM), c and rho of the 1 Cr-1/2 Mo row"
+_T22_ROW = "2 1/4 Cr-1 Mo: lambda from OSTI 455553 (ORNL TRANSFORM), c, rho of 1 Cr-1/2 Mo"
 _T22_SOURCE = (
     "lambda: ORNL TRANSFORM-Library, TRANSFORM.Media.Solids.Cr225Mo1 (OSTI 455553); "
     "c, rho: " + _SOURCE + ", 1 Cr-1/2 Mo"
