@@ -52,6 +52,7 @@ LIMITS: dict[str, int] = {
     "n_sections": 1000,  # sections of one heat exchanger
     "n_inlets": 64,  # inlets of one mixer
     "n_outlets": 64,  # outlets of one splitter
+    "n_tubes": 1_000_000,  # parallel tubes of a pipe, exchanger or condenser (no allocation)
     "count": 10_000,  # any other integer parameter
     "cells": 20_000,  # volumes and sections of the whole plant together
     "components": 2_000,  # components of one plant

@@ -188,7 +188,12 @@ def stored(run: Run) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
         energy += u
         fluid_u += u
         walls = cols(df, rf"{n}\.T_w(\[\d+\])?")
-        if walls and not _fixed_wall(comp):
+        metal_wall = getattr(comp, "wall_metal", None) is not None or getattr(
+            comp, "wall_parts", ()
+        )
+        if metal_wall and f"{name}.E_wall" in df.columns:  # from geometry: m e(T_w)
+            energy += df[f"{name}.E_wall"].to_numpy()
+        elif walls and not _fixed_wall(comp):
             energy += comp.params.get("C_wall", 0.0) / len(walls) * df[walls].to_numpy().sum(1)
         if type(comp).__name__ == "Pump" and comp.casing:  # the casing water M h_2
             energy += comp.params["M_casing"] * df[f"{name}.h_2"].to_numpy()

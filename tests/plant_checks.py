@@ -42,6 +42,8 @@ def stored(plant, res):
     for c in plant.components.values():
         if isinstance(c, Pipe):
             E = E + res[f"{c.name}.E_wall"]
+        elif isinstance(c, HeatExchanger) and c.wall_parts:  # from geometry: m e(T_w)
+            E = E + res[f"{c.name}.E_wall"]
         elif isinstance(c, HeatExchanger):
             C_i = c.params["C_wall"] / c.n
             E = E + C_i * sum(res[f"{c.name}.T_w[{i}]"] for i in range(c.n))

@@ -134,6 +134,7 @@ class Channel:
         dp_nominal: float | None = None,
         kA_exponent: float = 0.0,
         m_kA: float | None = None,
+        laws=None,
     ):
         self.prefix = prefix
         self.inlet, self.outlet = inlet, outlet
@@ -157,6 +158,8 @@ class Channel:
         # (``walls.flow_scaled_kA``), off for e = 0
         self.kA_exponent = float(kA_exponent)
         self.m_kA = float(m_kA if m_kA is not None else m_nominal)
+        #: friction and heat transfer from geometry (``tube_laws.ChannelLaws``), or None
+        self.laws = laws
         P = prefix
         self.m, self.M, self.U, self.Q = P + "m", P + "M", P + "U", P + "Q"
         self.pv, self.hv = P + "p_v", P + "h_v"
@@ -167,7 +170,14 @@ class Channel:
 
     @property
     def frictionless(self) -> bool:
+        if self.laws is not None and self.laws.friction is not None:
+            return False
         return (self.k_i if self.k_i is not None else self.c_i) == 0.0
+
+    @property
+    def heat_law(self):
+        """The heat-transfer law from geometry (``tube_laws``), or None (kA_i)."""
+        return None if self.laws is None else self.laws.heat
 
     # local names of state S_j (0 = inlet node, 1..n = volumes, n+1 = outlet node)
     def state_names(self, j):
@@ -214,7 +224,8 @@ class Channel:
             return ()
 
         ie_inflow = inflow if self.mean else none
-        kA_flows = flows if self.kA_exponent else none  # kA ~ m^e reads the flows
+        # kA ~ m^e and the correlations of a heat law read the flows
+        kA_flows = flows if self.kA_exponent or self.heat_law is not None else none
         ht_inflow = none if self.heat_transfer == "outlet" else inflow
 
         def block(key):
@@ -326,26 +337,41 @@ class Channel:
             return friction_dp(self.k_i, m, rho, self.m_reg)
         return self.c_i * m * np.sqrt(m * m + self.m_reg * self.m_reg)
 
-    def blocks(self, x, xp, props, T_wall):
+    def blocks(self, x, xp, props, T_wall, medium=None):
         """The residual of each equation of ``equations()`` by its name (prefix
-        included): six arrays of n, and "outlet_pressure" an array of one."""
+        included): six arrays of n, and "outlet_pressure" an array of one. ``medium``:
+        the channel's, needed by laws from geometry (``laws``)."""
         rows = self.__dict__.get("_rows")
         if rows is None:
             rows = self._rows = ChannelRows([self])
         p, h, T, rho, u = props
+        bound = self.bind_laws(medium, props, x.modes)
         values = rows.residuals(
             p, h, T, rho, u, x[self.m], x[self.M], x[self.U], x[self.Q], xp[self.M], xp[self.U],
-            T_wall,
+            T_wall, bound,
         )  # fmt: skip
         P = self.prefix
         return {P + name: v for name, v in zip(ChannelRows.NAMES, values, strict=True)}
 
+    def bind_laws(self, medium, props, modes):
+        """The laws from geometry at this evaluation's states (``tube_laws.BoundLaws``),
+        or None without them; each volume's phase mode (when kept) chooses its
+        correlations, the outlet node takes the last volume's."""
+        if self.laws is None:
+            return None
+        if medium is None:  # pragma: no cover - the components pass it
+            raise ValueError("Channel.blocks: a channel with laws needs its medium")
+        mode = modes.get(self.phase_key) if self.phase_modes else None
+        branch = None if mode is None else np.concatenate(([0], mode, mode[-1:]))
+        p, h, T, rho, _ = props
+        return self.laws.bind(medium, p, h, T, rho, branch)
+
     def batch_key(self):
         """Channels with equal keys can be evaluated as one (``ChannelRows`` of several):
         the same equations (internal energy, heat transfer law, adiabatic or not,
-        friction law); None for a channel that cannot (flow-dependent kA, or
-        ``physics.LMTD_NUMBA_MIN`` volumes or more, whose LMTD is compiled)."""
-        if self.kA_exponent or self.n >= LMTD_NUMBA_MIN:
+        friction law); None for a channel that cannot (flow-dependent kA, laws from
+        geometry, or ``physics.LMTD_NUMBA_MIN`` volumes or more, whose LMTD is compiled)."""
+        if self.kA_exponent or self.laws is not None or self.n >= LMTD_NUMBA_MIN:
             return None
         return (self.mean, self.heat_transfer, self.kA_i == 0.0, self.k_i is not None)
 
@@ -533,7 +559,10 @@ class ChannelRows:
         self.mean, self.heat_transfer = ch.mean, ch.heat_transfer
         self.friction_k = ch.k_i is not None
         self.kA_exponent, self.m_kA = ch.kA_exponent, ch.m_kA
-        self.adiabatic = ch.kA_i == 0.0 and not ch.kA_exponent
+        self.adiabatic = ch.kA_i == 0.0 and not ch.kA_exponent and ch.heat_law is None
+        #: laws from geometry (one channel only: ``Channel.batch_key`` is None with them)
+        self.friction_law = ch.laws is not None and ch.laws.friction is not None
+        self.heat_law = ch.heat_law is not None
         if len(channels) == 1:
             self.face_left, self.face_right = slice(None, -1), slice(1, None)
             self.v_in, self.v_out = slice(None, -1), slice(1, None)
@@ -579,8 +608,10 @@ class ChannelRows:
         # numpy's, as each channel alone (fewer than LMTD_NUMBA_MIN volumes: batch_key)
         self.lmtd = lmtd_numpy
 
-    def residuals(self, p, h, T, rho, u, m, M, U, Q, dM, dU, T_wall):
-        """The seven blocks of ``NAMES`` (module doc), in that order."""
+    def residuals(self, p, h, T, rho, u, m, M, U, Q, dM, dU, T_wall, laws=None):
+        """The seven blocks of ``NAMES`` (module doc), in that order. ``laws``: the
+        channel's laws from geometry bound to these states (``tube_laws.BoundLaws``;
+        friction, static head and UA instead of k_i and kA_i), or None."""
         # the upwind weights of every face, once: wp = w(m[j]), wm = w(-m[j])
         wp, wm = upwind_weight_pair(m, self.eps_face)
         E = wp * h[self.face_left] - wm * h[self.face_right]  # face_energy
@@ -610,7 +641,9 @@ class ChannelRows:
         else:  # "mean"
             dT = 0.5 * (T_a + T_i) - T_wall
         kA = self.kA_i
-        if self.kA_exponent:
+        if self.heat_law:
+            kA = laws.conductance(m[self.v_in], m[self.v_out], T_wall)
+        elif self.kA_exponent:
             from dnasim.components.walls import flow_scaled_kA
 
             mv = 0.5 * (m[self.v_in] + m[self.v_out])
@@ -618,10 +651,14 @@ class ChannelRows:
         heat = Q - kA * dT
         mf = m[self.v_in]
         rho_f = upwind_mean_weighted(a, wm[self.v_in], rho[self.left], rho[own])
-        if self.friction_k:
+        rho_head = rho_f
+        if self.friction_law:
+            friction = laws.friction(mf, a, wm[self.v_in])
+            rho_head = laws.head_density(a, wm[self.v_in])
+        elif self.friction_k:
             friction = friction_dp(self.k_i, mf, rho_f, self.m_reg)
         else:
             friction = self.c_i * mf * np.sqrt(mf * mf + self.m_reg * self.m_reg)
-        momentum = p[self.left] - p[own] - friction - rho_f * G * self.dz_i
+        momentum = p[self.left] - p[own] - friction - rho_head * G * self.dz_i
         outlet_pressure = p[self.outlet_node] - p[self.last]
         return mass, energy, density, internal, heat, momentum, outlet_pressure

@@ -25,7 +25,14 @@ from dnasim.components.physics import (
     softplus,
     upwind_weight,
 )
+from dnasim.components.tube_geometry import Tubes, tube_params, tubes_from_params
+from dnasim.components.tube_laws import FluidProperties, PropertyMemos, TubeConvection, TubeFriction
+from dnasim.correlations.condensation import nusselt_horizontal_tube
 from dnasim.errors import PlantError
+
+#: fixed-point steps of the film temperature difference of a condenser from geometry
+#: (contraction below 1/4 per step: 12 steps leave < 1e-7 of it)
+FILM_STEPS = 12
 
 #: width [J/kg] of the smooth min(h_v, h') of the condensate drawn from the hotwell
 H_MIN_WIDTH = 1.0
@@ -72,6 +79,25 @@ class Condenser(Component):
     steam above it. A steady start fixes the level only through the hotwell's
     static head (weakly): prefer a given start or a level controller.
 
+    From geometry (D given; ``dnasim.components.tube_geometry``, ``tube_laws``): the
+    cooling water flows through n_tubes tubes of inner diameter D, length ``length``
+    per pass, in n_passes passes (n_tubes/n_passes tubes per pass, the water's path
+    n_passes length), wall wall_thickness of wall_material. UA is then computed each
+    evaluation (UA and cw_k are not given) as the series of three resistances at the
+    water's inlet state and the shell's saturation state:
+      water     1/(h_w A_i), h_w by convection = "gnielinski" (VDI G1, default) or
+                "dittus_boelter" at the water's flow per tube
+      wall      ln(D_o/D)/(2 pi lambda n_tubes length), lambda at (T_sat + T_w1)/2
+      shell     1/(h_c A_o), h_c = Nusselt's film condensation on horizontal tubes with
+                Kern's row correction N^(-1/6) (``condensation.nusselt_horizontal_tube``;
+                N = n_rows, default round(sqrt(n_tubes))), saturated liquid properties
+                at p_v, at the film's temperature difference dT_f = dT_m R_c/R_total,
+                dT_m = Q/UA the mean difference of the epsilon-NTU solution (a fixed
+                point in dT_f, FILM_STEPS steps)
+    and cw_friction is Darcy-Weisbach over the path (friction = "colebrook", default,
+    or "haaland"), the upwind blend of the inlet's and the outlet's state. Outputs
+    UA [W/K] and h_shell [W/(m2 K)]. A clean condenser's numbers: no fouling, no air.
+
     Physical limits, terminal switches on the liquid volume V_l = M (1 - x)/rho'
     (not clipped): the run stops at the located crossing with a message naming the
     condenser, its level and the time, when the hotwell runs dry (g = V_l/V, the
@@ -101,6 +127,33 @@ class Condenser(Component):
         ),
         Param("cw_m_nominal", "kg/s", 100.0, "typical cooling-water flow", min=0.0),
         Param("Q", "W", None, "heat removed (cooling = 'duty')", time_function=True),
+        *tube_params("cooling-water tube length of one pass (geometry)"),
+        Param("n_passes", "1", 1, "cooling-water passes (geometry)", min=1, kind="int"),
+        Param(
+            "n_rows",
+            "1",
+            None,
+            "tube rows one above the other, for the condensate's row correction (geometry; "
+            "default round(sqrt(n_tubes)))",
+            min=1,
+            kind="int",
+        ),
+        Param(
+            "friction",
+            "1",
+            "colebrook",
+            "cooling-water friction from geometry: colebrook or haaland",
+            kind="string",
+            choices=("colebrook", "haaland"),
+        ),
+        Param(
+            "convection",
+            "1",
+            "gnielinski",
+            "cooling-water heat transfer from geometry: gnielinski (VDI G1) or dittus_boelter",
+            kind="string",
+            choices=("gnielinski", "dittus_boelter"),
+        ),
         Param("p0", "Pa", None, "initial shell pressure (given start)", min=0.0),
         Param("level0", "m", None, "initial hotwell level (given start)", min=0.0),
         Param("m_nominal", "kg/s", 1.0, "typical steam flow (scales and tolerances)", min=0.0),
@@ -130,7 +183,17 @@ class Condenser(Component):
         P = self.params
         name = f"component '{self.name}' (Condenser)"
         self.water = P["cooling"] == "water"
-        if self.water and P["UA"] is None:
+        self.tubes = tubes_from_params(self.name, P)
+        if self.tubes is not None:
+            if not self.water:
+                raise PlantError(f"{name}: tubes (D, ...) carry cooling water: cooling = 'water'")
+            for key, default in (("UA", None), ("cw_k", None), ("cw_dp_nominal", 5e4)):
+                if P[key] != default:
+                    raise PlantError(
+                        f"{name}: '{key}' follows from the tubes' geometry (D, length, n_tubes, "
+                        "...): leave it out, or leave out D for the lumped condenser"
+                    )
+        elif self.water and P["UA"] is None:
             raise PlantError(f"{name}: cooling = 'water' needs UA [W/K]")
         if not self.water and P["Q"] is None:
             raise PlantError(f"{name}: cooling = 'duty' needs the duty Q [W]")
@@ -142,6 +205,19 @@ class Condenser(Component):
         mw = P["cw_m_nominal"]
         self.m_reg_w = M_REG_REL * mw
         self.cw_k = P["cw_k"]  # with cw_dp_nominal: k = dp_nom rho / m_nom^2, rho at run time
+        if self.tubes is not None:
+            t = self.tubes
+            # the water's path: n_tubes/n_passes tubes in parallel, n_passes lengths long
+            self.path = Tubes(t.D, P["n_passes"] * t.length, t.n_tubes / P["n_passes"],
+                              t.wall_thickness, t.metal, t.roughness)  # fmt: skip
+            self.cw_friction = TubeFriction(
+                self.path, 1, P["friction"], "homogeneous", self.m_reg_w
+            )
+            self.cw_convection = TubeConvection(
+                self.path, 1, P["convection"], m_reg=self.m_reg_w, wall_resistance=False
+            )
+            self.n_rows = P["n_rows"] or max(1, round(math.sqrt(t.n_tubes)))
+            self._memos = {}
 
     def fluid_ports(self):
         eps = self.m_eps
@@ -152,6 +228,8 @@ class Condenser(Component):
         if self.water:
             eps_w = M_EPS_W * self.params["cw_m_nominal"]
             param = "cw_k" if self.cw_k is not None else "cw_dp_nominal"
+            if self.tubes is not None:
+                param = "D"
             out += [
                 FluidPort(
                     "cw_in",
@@ -314,21 +392,22 @@ class Condenser(Component):
                     "cw_friction",
                     y=cw,
                     unit="Pa",
-                    doc="p_cw_in - p_cw_out = cw_k m_w sqrt(m_w^2 + m_reg^2)/rho_w",
-                    residual=lambda t, x, xp: (
-                        x["cw_in.p"]
-                        - x["cw_out.p"]
-                        - friction_dp(x.work["cw_k"], x["m_w"], x.work["rho_w"], self.m_reg_w)
-                    ),
+                    doc="p_cw_in - p_cw_out = cw_k m_w sqrt(m_w^2 + m_reg^2)/rho_w"
+                    if self.tubes is None
+                    else "p_cw_in - p_cw_out = dp_Darcy-Weisbach(m_w) over the tubes' path",
+                    residual=lambda t, x, xp: x["cw_in.p"] - x["cw_out.p"] - x.work["cw_dp"],
                 ),
                 Equation(
                     "cw_outlet",
-                    y=("h_w2", "T_sat") + cw,
+                    y=("h_w2", "T_sat") + cw + (("p_v",) if self.tubes is not None else ()),
                     unit="J/kg",
                     doc="h_w2 = h_w1 + eps cp_w (T_sat - T_w1)",
                     residual=lambda t, x, xp: (
                         x["h_w2"]
-                        - (x["cw_in.h"] + self.water_heating(x["m_w"], x.work["s1"], x["T_sat"]))
+                        - (
+                            x["cw_in.h"]
+                            + self.water_heating(x["m_w"], x.work["s1"], x["T_sat"], x.work["UA"])
+                        )
                     ),
                 ),
                 Equation(
@@ -408,17 +487,78 @@ class Condenser(Component):
             medium = self.water_medium
             s1 = medium.state(x["cw_in.p"], x["cw_in.h"])
             s2 = medium.state(x["cw_out.p"], x["cw_out.h"])
+            if self.tubes is not None:
+                UA, h_c = self.geometry_ua(p, T_sat, x["cw_in.p"], x["cw_in.h"], s1, x["m_w"])
+                work.update(s1=s1, UA=UA, h_shell=h_c, cw_dp=self.cw_pressure_drop(x, s1, s2))
+                return work
             k = self.cw_k
             if k is None:
                 k = P["cw_dp_nominal"] * s1.rho / P["cw_m_nominal"] ** 2
-            work.update(s1=s1, rho_w=s1.rho if x["m_w"] >= 0 else s2.rho, cw_k=k)
+            rho_w = s1.rho if x["m_w"] >= 0 else s2.rho
+            work.update(s1=s1, UA=P["UA"], cw_dp=friction_dp(k, x["m_w"], rho_w, self.m_reg_w))
         return work
 
-    def water_heating(self, mw, s1, T_sat):
-        """eps cp_w (T_sat - T_w1) [J/kg], the epsilon-NTU rise of the water's enthalpy."""
+    def water_heating(self, mw, s1, T_sat, UA=None):
+        """eps cp_w (T_sat - T_w1) [J/kg], the epsilon-NTU rise of the water's enthalpy
+        (UA [W/K]: the parameter's, or from geometry)."""
         m_abs = math.sqrt(mw * mw + self.m_reg_w * self.m_reg_w)
-        ntu = self.params["UA"] / (s1.cp * m_abs)
+        ntu = (self.params["UA"] if UA is None else UA) / (s1.cp * m_abs)
         return -math.expm1(-ntu) * s1.cp * (T_sat - s1.T)
+
+    # ----------------------------------------------------------- geometry
+    def _fluid(self, key, medium, p, h, s):
+        """``tube_laws.FluidProperties`` of one water state (memo per port)."""
+        memos = self._memos.get(key)
+        if memos is None or memos.medium is not medium:
+            memos = self._memos[key] = PropertyMemos(medium)
+        return FluidProperties(
+            medium, np.array([p]), np.array([h]), np.array([s.T]), np.array([s.rho]), None, memos
+        )
+
+    def geometry_ua(self, p_shell, T_sat, p_w, h_w, s1, m_w):
+        """(UA [W/K], h_c [W/(m2 K)]) of the condenser from geometry (class doc) at the
+        shell pressure p_shell [Pa] (T_sat [K]), the water's inlet state (p_w [Pa], h_w
+        [J/kg], its state s1) and flow m_w [kg/s]."""
+        t = self.tubes
+        fp = self._fluid("cw_in", self.water_medium, p_w, h_w, s1)
+        T_w = np.array([T_sat])
+        h_w_, _ = self.cw_convection.h(np.array([m_w]), T_w, fp, np.array([0]))
+        R_i = 1.0 / (float(h_w_[0]) * t.A_inner)
+        T_wall = 0.5 * (T_sat + s1.T)
+        lam = t.metal.conductivity(T_wall) if t.has_wall else 1.0
+        R_w = float(t.conduction_resistance(lam)) if t.has_wall else 0.0
+        sat = self.shell_medium.saturation_transport(np.array([p_shell]))
+        rl, rv = float(sat["rho_l"][0]), float(sat["rho_v"][0])
+        mul, kl, cpl = float(sat["mu_l"][0]), float(sat["k_l"][0]), float(sat["cp_l"][0])
+        h_lv = float(sat["h_v"][0] - sat["h_l"][0])
+        C = s1.cp * math.sqrt(m_w * m_w + self.m_reg_w * self.m_reg_w)
+        dT_in = T_sat - s1.T
+        A_o = t.A_outer
+        dT_f = max(abs(dT_in), 1e-3) * 0.5
+        for _ in range(FILM_STEPS):
+            # |dT_f| regularised at 0.1 K: the film coefficient stays finite and smooth
+            dT_r = math.sqrt(dT_f * dT_f + 0.01)
+            h_c = float(nusselt_horizontal_tube(t.D_out, dT_r, rl, rv, mul, kl, cpl, h_lv,
+                                                self.n_rows))  # fmt: skip
+            R_c = 1.0 / (h_c * A_o)
+            UA = 1.0 / (R_c + R_w + R_i)
+            eps = -math.expm1(-UA / C)
+            dT_m = eps * C * dT_in / UA  # Q/UA: the mean temperature difference
+            dT_f = dT_m * R_c * UA
+        return UA, h_c
+
+    def cw_pressure_drop(self, x, s1, s2):
+        """Darcy-Weisbach friction of the cooling water [Pa], the upwind blend of its
+        inlet and outlet state (class doc)."""
+        mw = x["m_w"]
+        f1 = self._fluid("cw_in", self.water_medium, x["cw_in.p"], x["cw_in.h"], s1)
+        f2 = self._fluid("cw_out", self.water_medium, x["cw_out.p"], x["cw_out.h"], s2)
+        m = np.array([mw])
+        dp1 = float(self.cw_friction.dp(m, f1, np.array([0]))[0])
+        dp2 = float(self.cw_friction.dp(m, f2, np.array([0]))[0])
+        eps = M_EPS_W * self.params["cw_m_nominal"]
+        a, b = float(upwind_weight(mw, eps)), float(upwind_weight(-mw, eps))
+        return (a * dp1 + b * dp2) / (a + b)
 
     # ----------------------------------------------------------------- limits
     def switches(self):
@@ -477,15 +617,26 @@ class Condenser(Component):
         ]
 
     def outputs(self):
-        return [
+        out = [
             Output("x", "1", "quality of the shell's mixture"),
             Output("M_total", "kg", "mass in the shell"),
             Output("U_total", "J", "internal energy in the shell"),
         ]
+        if self.tubes is not None:
+            out += [
+                Output("UA", "W/K", "overall heat transfer coefficient times area (geometry)"),
+                Output("h_shell", "W/(m2.K)", "film condensation coefficient (geometry)"),
+            ]
+        return out
 
     def output_values(self, t, x, xp):
-        hl, hv, _, _, _ = self.saturation(x["p_v"])
-        return [(x["h_v"] - hl) / (hv - hl), x["M"], x["U"]]
+        hl, hv, _, _, T_sat = self.saturation(x["p_v"])
+        out = [(x["h_v"] - hl) / (hv - hl), x["M"], x["U"]]
+        if self.tubes is not None:
+            s1 = self.water_medium.state(x["cw_in.p"], x["cw_in.h"])
+            out += list(self.geometry_ua(x["p_v"], T_sat, x["cw_in.p"], x["cw_in.h"], s1,
+                                         x["m_w"]))  # fmt: skip
+        return out
 
     # ---------------------------------------------------------- initialisation
     def design_values(self, t0, x):
@@ -520,7 +671,10 @@ class Condenser(Component):
         if self.water:
             x["m_w"] = P["cw_m_nominal"]
             s1 = self.water_medium.state(x["cw_in.p"], x["cw_in.h"])
-            x["h_w2"] = x["cw_in.h"] + self.water_heating(x["m_w"], s1, T_sat)
+            UA = None
+            if self.tubes is not None:
+                UA, _ = self.geometry_ua(p, T_sat, x["cw_in.p"], x["cw_in.h"], s1, x["m_w"])
+            x["h_w2"] = x["cw_in.h"] + self.water_heating(x["m_w"], s1, T_sat, UA)
             x["Q"] = x["m_w"] * (x["h_w2"] - x["cw_in.h"])
         else:
             x["Q"] = self.param_at("Q", t0)

@@ -16,6 +16,8 @@ from dnasim.components.physics import (
     is_condensable,
     upwind_weight,
 )
+from dnasim.components.tube_geometry import tube_params, tubes_from_params
+from dnasim.components.tube_laws import ChannelLaws, TubeConvection, TubeFriction
 from dnasim.errors import PlantError, ResidualDomainError
 
 
@@ -65,13 +67,77 @@ class Pipe(Component):
 
     Given start (start="given"): the fluid starts at pressure p0 (default: the
     node guesses) and temperature T0, the wall at T_wall0 (default T0).
+
+    From geometry (D given; ``dnasim.components.tube_geometry``, ``tube_laws``): n_tubes
+    parallel tubes of inner diameter D and length ``length``, V = n_tubes pi D^2/4
+    length (V is then not given); with wall_thickness and wall_material the wall's mass
+    m_w, its capacity m_w c(T_w) (the wall equation m_w/n c(T_w) dT_w/dt = Q[i], E_wall
+    = m_w/n sum e(T_w)) and its conduction lambda(T_w) (C_wall is then not given; a
+    layered wall takes r_in = D/2, r_out = D/2 + wall_thickness and the metal's
+    lambda(T)). friction = "colebrook" (default with D) or "haaland": the momentum
+    balance's friction is Darcy-Weisbach per face with the two-phase multiplier
+    two_phase_friction ("friedel", default, or "homogeneous"), and the static head
+    uses the face's mixture density (void_fraction "homogeneous", the mass balance's,
+    or "zivi"); convection = "gnielinski" (default with D and a wall) or
+    "dittus_boelter": Q[i] = UA_i LMTD(...) with UA_i from the inside coefficient
+    (single phase; Chen's flow boiling with the dry-out quality x_dryout, Shah's
+    condensation) and the inner half of the wall. "lumped" keeps k or kA; giving k
+    or kA with a correlation is an error. dz, the height of the outlet above the
+    inlet, gives the static head in both forms.
     """
 
     PARAMS = (
-        Param("V", "m3", doc="fluid volume", min=0.0),
+        Param(
+            "V", "m3", None, "fluid volume: required, unless D is given (then computed)", min=0.0
+        ),
         Param("kA", "W/K", 0.0, "heat transfer coefficient times area, fluid to wall", min=0.0),
         Param("k", "1/m4", 0.0, "friction coefficient: dp = k m|m|/rho", min=0.0),
         Param("dz", "m", 0.0, "height of outlet above inlet"),
+        *tube_params("pipe (tube) length: the geometry's, and a layered wall's"),
+        Param(
+            "friction",
+            "1",
+            None,
+            "friction law: 'lumped' (k) or Darcy-Weisbach from geometry 'colebrook' / "
+            "'haaland' (default: colebrook when D is given, else lumped)",
+            kind="string",
+            choices=("lumped", "colebrook", "haaland"),
+        ),
+        Param(
+            "two_phase_friction",
+            "1",
+            "friedel",
+            "two-phase friction from geometry: friedel (Friedel 1979) or homogeneous",
+            kind="string",
+            choices=("friedel", "homogeneous"),
+        ),
+        Param(
+            "void_fraction",
+            "1",
+            "homogeneous",
+            "static head's two-phase density from geometry: homogeneous (the mass balance's) "
+            "or zivi (Zivi 1964)",
+            kind="string",
+            choices=("homogeneous", "zivi"),
+        ),
+        Param(
+            "convection",
+            "1",
+            None,
+            "fluid-to-wall heat transfer: 'lumped' (kA) or from geometry 'gnielinski' (VDI "
+            "G1) / 'dittus_boelter', with Chen boiling and Shah condensation (default: "
+            "gnielinski when D is given and there is a wall, else lumped)",
+            kind="string",
+            choices=("lumped", "gnielinski", "dittus_boelter"),
+        ),
+        Param(
+            "x_dryout",
+            "1",
+            0.9,
+            "critical (dry-out) quality of Chen's flow boiling (geometry)",
+            min=0.0,
+            max=1.0,
+        ),
         Param(
             "C_wall", "J/K", 0.0, "heat capacity of the wall (mass times specific heat)", min=0.0
         ),
@@ -135,7 +201,6 @@ class Pipe(Component):
         ),
         Param("r_in", "m", None, "inner wall radius (layered wall)", min=0.0),
         Param("r_out", "m", None, "outer wall radius (layered wall)", min=0.0),
-        Param("length", "m", None, "pipe length (layered wall)", min=0.0),
         Param("wall_conductivity", "W/(m.K)", None, "wall conductivity (layered wall)", min=0.0),
         Param(
             "T_outer",
@@ -173,8 +238,14 @@ class Pipe(Component):
     def setup(self):
         P = self.params
         n = P["n_volumes"]
-        if P["V"] <= 0:
+        self.tubes = tubes_from_params(self.name, P)
+        self._check_geometry()
+        self.V = self.tubes.V if self.tubes is not None else P["V"]
+        if self.V <= 0:
             raise PlantError(f"component '{self.name}': parameter 'V' must be > 0 m3")
+        #: the wall's metal (geometry with wall_thickness and wall_material), or None
+        walled = self.tubes is not None and self.tubes.has_wall
+        self.wall_metal = self.tubes.metal if walled else None
         self.wall_model = None
         if P["wall_layers"] or any(P[k] is not None for k in ("T_outer", "kA_outer", "Q_outer")):
             if P["T_wall"] is not None:
@@ -185,21 +256,31 @@ class Pipe(Component):
                 )
             from dnasim.components.walls import WallModel
 
+            t = self.tubes
+            metal = self.wall_metal
             self.wall_model = WallModel(
                 owner=self.name,
                 n=n,
-                C_wall=P["C_wall"],
+                C_wall=t.wall_mass if metal is not None else P["C_wall"],
                 layers=P["wall_layers"],
-                r_in=P["r_in"],
-                r_out=P["r_out"],
-                length=P["length"],
+                r_in=t.D / 2 if metal is not None else P["r_in"],
+                r_out=t.D_out / 2 if metal is not None else P["r_out"],
+                # the shells of all tubes in parallel: their length is n_tubes length
+                length=t.n_tubes * t.length if metal is not None else P["length"],
                 conductivity=P["wall_conductivity"],
                 T_outer=P["T_outer"],
                 kA_outer=P["kA_outer"],
                 Q_outer=P["Q_outer"],
                 param_at=self.param_at,
+                metal=metal,
             )
-        if P["C_wall"] == 0 and P["T_wall"] is None and P["kA"] > 0 and self.wall_model is None:
+        if (
+            P["C_wall"] == 0
+            and P["T_wall"] is None
+            and P["kA"] > 0
+            and self.wall_model is None
+            and self.wall_metal is None
+        ):
             raise PlantError(
                 f"component '{self.name}': with kA > 0 give either C_wall > 0 (wall storage) or "
                 "T_wall (fixed wall)"
@@ -210,15 +291,21 @@ class Pipe(Component):
         self.internal_energy = P["internal_energy"] or "outlet"
         self.fixed_wall = P["T_wall"] is not None
         # kA = 0 and no wall capacity: adiabatic pipe, the wall variable just follows the fluid
-        self.no_wall = not self.fixed_wall and P["C_wall"] == 0 and self.wall_model is None
+        self.no_wall = (
+            not self.fixed_wall
+            and P["C_wall"] == 0
+            and self.wall_model is None
+            and self.wall_metal is None
+        )
         m_reg = P["m_reg"] if P["m_reg"] is not None else M_REG_REL * max(P["m_nominal"], 1e-12)
+        laws = self._laws(n, m_reg)
         self.channel = Channel(
             prefix="",
             inlet="inlet",
             outlet="outlet",
             n=n,
-            V=P["V"],
-            k=P["k"],
+            V=self.V,
+            k=P["k"] if self.friction == "lumped" else None,
             dz=P["dz"],
             kA=P["kA"],
             m_nominal=P["m_nominal"],
@@ -227,7 +314,82 @@ class Pipe(Component):
             internal_energy=self.internal_energy,
             wall=[f"T_w[{i}]" for i in range(n)],
             heat_transfer=P["heat_transfer"],
+            laws=laws,
         )
+
+    def _check_geometry(self):
+        """The combinations of the lumped and the geometry parameters (class doc): a
+        quantity the geometry gives may not be given too, a correlation needs D."""
+        P, name, geo = self.params, self.name, self.tubes is not None
+        if geo:
+            for key in ("V", "r_in", "r_out"):
+                if P[key] is not None:
+                    raise PlantError(
+                        f"component '{name}': '{key}' follows from the geometry (D, length, "
+                        "n_tubes, wall_thickness): leave it out, or leave out D for the lumped "
+                        "pipe"
+                    )
+            if self.tubes.has_wall:
+                for key, default in (("C_wall", 0.0), ("wall_conductivity", None)):
+                    if P[key] != default:
+                        raise PlantError(
+                            f"component '{name}': '{key}' follows from wall_thickness and "
+                            f"wall_material ({self.tubes.metal.name}): leave it out"
+                        )
+        elif P["V"] is None:
+            raise PlantError(
+                f"component '{name}' (Pipe): parameter 'V' [m3] is required (fluid volume), "
+                "unless the pipe is given by geometry: the tubes' inner diameter D and length"
+            )
+        self.friction = P["friction"] or ("colebrook" if geo else "lumped")
+        has_wall = (
+            P["T_wall"] is not None
+            or P["C_wall"] > 0
+            or (geo and self.tubes.has_wall)
+            or P["wall_layers"] > 0
+            or any(P[k] is not None for k in ("T_outer", "kA_outer", "Q_outer"))
+        )
+        self.convection = P["convection"] or ("gnielinski" if geo and has_wall else "lumped")
+        for what, law, lumped, unit in (
+            ("friction", self.friction, "k", "1/m4"),
+            ("convection", self.convection, "kA", "W/K"),
+        ):
+            if law == "lumped":
+                continue
+            if not geo:
+                raise PlantError(
+                    f"component '{name}': {what} = '{law}' is a correlation from geometry: give "
+                    "the tubes' inner diameter D and length (or the lumped '{lumped}')"
+                )
+            if P[lumped] != 0:
+                raise PlantError(
+                    f"component '{name}': '{lumped}' = {P[lumped]:g} {unit} (lumped) and "
+                    f"{what} = '{law}' (from geometry) are two models of one thing: give "
+                    f"one (leave out '{lumped}', or set {what} = 'lumped')"
+                )
+        if self.convection != "lumped" and not has_wall:
+            raise PlantError(
+                f"component '{name}': convection = '{self.convection}' needs a wall to transfer "
+                "heat to: wall_thickness and wall_material, C_wall, T_wall or an outer boundary"
+            )
+
+    def _laws(self, n, m_reg):
+        """The ``tube_laws.ChannelLaws`` of a pipe from geometry, or None."""
+        P = self.params
+        if self.friction == "lumped" and self.convection == "lumped":
+            return None
+        friction = heat = None
+        if self.friction != "lumped":
+            friction = TubeFriction(
+                self.tubes, n, self.friction, P["two_phase_friction"], m_reg, P["void_fraction"]
+            )
+        if self.convection != "lumped":
+            # a layered wall's node 0 is the inner surface; a lumped wall's the mean radius
+            layered = self.wall_model is not None and self.wall_model.layers > 0
+            heat = TubeConvection(
+                self.tubes, n, self.convection, P["x_dryout"], m_reg, wall_resistance=not layered
+            )
+        return ChannelLaws(n, friction, heat)
 
     def fluid_ports(self):
         ch = self.channel
@@ -240,7 +402,7 @@ class Pipe(Component):
                 inlet_role,
                 "fluid in",
                 h_out=ch.h_out_inlet(),
-                pressure_param="k",
+                pressure_param="k" if self.friction == "lumped" else "D",
                 m_eps=ch.m_eps,
             ),
             FluidPort(
@@ -286,9 +448,12 @@ class Pipe(Component):
     def variables(self):
         P = self.params
         # M and U scales are raised to |initial value| by the assembly
-        M_nom = P["V"] / self.n * 1e-3
+        M_nom = self.V / self.n * 1e-3
         U_nom = M_nom * 1e3
-        Q_nom = max(P["kA"] / self.n * DT_Q_NOMINAL, 1.0)
+        kA = P["kA"]
+        if self.convection != "lumped":  # a scale only: 1000 W/(m2 K) on the inner surface
+            kA = 1000.0 * self.tubes.A_inner
+        Q_nom = max(kA / self.n * DT_Q_NOMINAL, 1.0)
         out = self.channel.variables(M_nom, U_nom, 1e5, 1e5, Q_nom) + [
             Variable("T_w", "K", 300.0, self.n, "wall temperature of volume i"),
         ]
@@ -332,6 +497,21 @@ class Pipe(Component):
                     residual=lambda t, x, xp: xp["Q_passed"] - np.sum(x["Q"]),
                 )
             )
+        elif self.wall_metal is not None:
+            m_i, metal = self.tubes.wall_mass / n, self.wall_metal
+            eqs.append(
+                Equation(
+                    "wall",
+                    size=n,
+                    y=lambda i: (f"Q[{i}]", f"T_w[{i}]"),
+                    yp=lambda i: (f"T_w[{i}]",),
+                    doc=f"{m_i:g} c(T_w[i]) dT_w[i]/dt = Q[i] ({metal.name})",
+                    unit="W",
+                    residual=lambda t, x, xp: (
+                        m_i * metal.heat_capacity(x["T_w"]) * xp["T_w"] - x["Q"]
+                    ),
+                )
+            )
         elif self.no_wall:
             eqs.append(
                 Equation(
@@ -362,7 +542,7 @@ class Pipe(Component):
         plant-wide vectors (``PipeBatch``, made by ``dnasim.system``): alike channels
         (``Channel.batch_key``) and no layered wall model; None: alone (also for a
         subclass, which may change the equations)."""
-        if type(self) is not Pipe or self.wall_model is not None:
+        if type(self) is not Pipe or self.wall_model is not None or self.wall_metal is not None:
             return None
         key = self.channel.batch_key()
         return None if key is None else ("Pipe", *key)
@@ -375,7 +555,7 @@ class Pipe(Component):
     def prepare(self, t, x, xp):
         """One property call for the n + 2 states, then every channel block."""
         props = self.channel.evaluate(self.medium, x)
-        work = self.channel.blocks(x, xp, props, x["T_w"])
+        work = self.channel.blocks(x, xp, props, x["T_w"], self.medium)
         work["T"] = props[2]
         return work
 
@@ -400,9 +580,7 @@ class Pipe(Component):
             T[-2],
             float(np.sum(x["M"])),
             float(np.sum(x["U"])),
-            self.wall_model.energy(x)
-            if self.wall_model is not None
-            else float(C_i * np.sum(x["T_w"])),
+            self.wall_energy(x, C_i),
             float(np.sum(x["Q"])),
             float(E[0]),
             float(E[-1]),
@@ -419,6 +597,15 @@ class Pipe(Component):
         if outside and duty > 0.0:
             out["heat_in"] = duty
         return out
+
+    def wall_energy(self, x, C_i) -> float:
+        """E_wall [J]: the wall model's, m_w/n sum e(T_w) of a metal wall, else C_i sum T_w."""
+        if self.wall_model is not None:
+            return self.wall_model.energy(x)
+        if self.wall_metal is not None:
+            m_i = self.tubes.wall_mass / self.n
+            return float(m_i * np.sum(self.wall_metal.enthalpy(x["T_w"])))
+        return float(C_i * np.sum(x["T_w"]))
 
     def guess_nodes(self, t0):
         P = self.params

@@ -39,6 +39,12 @@ outer surface (``Pipe``'s sign: heat leaving the plant), d Q_passed/dt =
 fixed nodes. So: d(U_fluid + E_wall)/dt = port energy flows - dQ_passed/dt,
 with E_wall = sum over the nodes that store heat of C_k T_k.
 
+A wall of a metal (``metal``, a ``dnasim.correlations.metals.Metal``: a pipe from
+geometry): C_wall is then the wall's mass [kg], node k holds the mass share m_k and
+stores m_k e(T_k) (e = ``Metal.enthalpy``, de/dT = c(T)), so its balance reads
+m_k c(T_k) dT_k/dt = ...; the conductances are G_k lambda((T_k + T_{k+1})/2) with
+G_k computed at lambda = 1 W/(m K).
+
 Flow-dependent heat transfer coefficient (the nominal-point scaling of a
 turbulent convective coefficient, alpha ~ Re^0.8 at fixed geometry and fluid):
 
@@ -92,8 +98,12 @@ class WallModel:
         kA_outer: float | None = None,
         Q_outer=None,
         param_at=None,
+        metal=None,
     ):
         self.owner, self.n, self.layers = owner, n, int(layers)
+        self.metal = metal
+        if metal is not None:
+            conductivity = 1.0  # G_k per unit conductivity; lambda(T) at run time
         self.N = self.layers + 1
         self.T_outer, self.kA_outer, self.Q_outer = T_outer, kA_outer, Q_outer
         self.param_at = param_at
@@ -265,24 +275,31 @@ class WallModel:
             return np.asarray(v["T_w"], dtype=float)[i]
         return np.asarray(v["T_wl"], dtype=float).reshape(self.n, self.N - 1)[i, k - 1]
 
+    def _G(self, k, Ta, Tb):
+        """Conductance of shell k [W/K] between nodes at Ta and Tb [K]."""
+        if self.metal is None:
+            return self.G[k]
+        return self.G[k] * self.metal.conductivity(0.5 * (Ta + Tb))
+
     def node_flow(self, x, k: int, i=slice(None)):
         """Net heat into node k [W] by conduction (and Q[i] at k = 0), of volume i (an
         int) or of all n (a slice)."""
         flow = np.zeros(self.n)[i]
         if k < self.N - 1:  # to node k+1
-            flow -= self.G[k] * (
-                self.node_temperature(x, k, i) - self.node_temperature(x, k + 1, i)
-            )
+            Ta, Tb = self.node_temperature(x, k, i), self.node_temperature(x, k + 1, i)
+            flow -= self._G(k, Ta, Tb) * (Ta - Tb)
         if k > 0:  # from node k-1
-            flow += self.G[k - 1] * (
-                self.node_temperature(x, k - 1, i) - self.node_temperature(x, k, i)
-            )
+            Ta, Tb = self.node_temperature(x, k - 1, i), self.node_temperature(x, k, i)
+            flow += self._G(k - 1, Ta, Tb) * (Ta - Tb)
         if k == 0:
             flow += np.asarray(x["Q"], dtype=float)[i]
         return flow
 
     def _node_residual(self, t, x, xp, k, i):
-        r = self.C[k] * self.node_temperature(xp, k, i) - self.node_flow(x, k, i)
+        C = self.C[k]
+        if self.metal is not None:
+            C = C * self.metal.heat_capacity(self.node_temperature(x, k, i))
+        r = C * self.node_temperature(xp, k, i) - self.node_flow(x, k, i)
         if k == self.N - 1:
             r -= self.outer_heat_in(t, self.node_temperature(x, k, i))
         return r
@@ -316,8 +333,11 @@ class WallModel:
         return q
 
     def energy(self, x) -> float:
-        """E_wall = sum C_k T_k [J] (nodes that store heat)."""
-        return float(np.sum(self.C[None, :] * self.temperatures(x)))
+        """E_wall = sum C_k T_k [J] (nodes that store heat; of a metal sum m_k e(T_k))."""
+        T = self.temperatures(x)
+        if self.metal is not None:
+            return float(np.sum(self.C[None, :] * self.metal.enthalpy(T)))
+        return float(np.sum(self.C[None, :] * T))
 
     def guess(self, t0, x, T_inner):
         """Nodes at T_inner (or T_outer for a fixed outer node)."""
