@@ -162,7 +162,7 @@ def write_plant_json(out_dir, desc: dict) -> Path:
     """Write ``desc`` to ``out_dir/plant.json`` (atomically); returns the path."""
     from dnasim.output import _atomic_write
 
-    text = json.dumps(desc, indent=1, ensure_ascii=False).encode("utf-8")
+    text = (json.dumps(desc, indent=1, ensure_ascii=False) + "\n").encode("utf-8")
     return _atomic_write(Path(out_dir) / PLANT_JSON, lambda f: f.write(text))
 
 
