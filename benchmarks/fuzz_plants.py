@@ -247,7 +247,7 @@ def classify(
     the command was given ``--allow-import`` (else the outcome is "internal")."""
     from click.testing import CliRunner
 
-    from dnasim.cli import main
+    from dnasim.cli.commands import main
 
     path = os.path.join(workdir, "fuzz.toml")
     with open(path, "w", encoding="utf-8", errors="surrogateescape") as f:

@@ -43,7 +43,7 @@ def best(f, reps, blocks):
 def residual_times(n):
     from plant_scaling import steam_pipe
 
-    from dnasim.start import initial_values
+    from dnasim.start.initial import initial_values
 
     dae = steam_pipe(n).compile()
     y0, yp0 = initial_values(dae, 0.0, "steady")

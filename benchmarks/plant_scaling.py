@@ -42,11 +42,11 @@ import time
 
 import numpy as np
 
-from dnasim.components import Pipe, PressureBoundary, Valve
+from dnasim.core.timefunctions import Step
+from dnasim.library import Pipe, PressureBoundary, Valve
 from dnasim.media import get_medium
-from dnasim.plant import Plant
-from dnasim.start import initial_values
-from dnasim.timefunctions import Step
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 T_END = 60.0
 
@@ -158,7 +158,7 @@ def run(n, solver, rtol=1e-6, linsolver=None, geometry=False):
             )
         else:
             from dnasim.solver.ida import solve_ida
-            from dnasim.start import reinitialise
+            from dnasim.start.initial import reinitialise
 
             res = solve_ida(
                 dae.residual,

@@ -47,7 +47,7 @@ PLANTS = (
 def _run(path):
     """(system, results, CPU s) of one in-process run: load, compile, simulate."""
     import dnasim
-    from dnasim.simulation import simulate, simulation_keywords
+    from dnasim.run.simulation import simulate, simulation_keywords
 
     t0 = time.process_time()
     plant = dnasim.load_plant(str(ROOT / path))
@@ -60,7 +60,7 @@ def _run(path):
 def record(path):
     """(system, calls) of one run: calls[k] = ("full", t, y, yp) or ("cols", cols, t, y,
     yp, f0), in the order the solver made them."""
-    from dnasim.system import System
+    from dnasim.compilation.system import System
 
     calls = []
     full, for_cols = System.residual, System.residual_for_columns
@@ -89,7 +89,7 @@ def record(path):
 
 def replay(system, calls):
     """CPU seconds (whole-plant calls, their number, column calls, their number)."""
-    from dnasim.errors import ResidualDomainError
+    from dnasim.core.errors import ResidualDomainError
 
     clock = time.process_time
     funcs = {}
@@ -126,7 +126,7 @@ def component_times(system, calls):
     """{unit: CPU s} over the whole-plant calls: each evaluation unit alone (a
     component, or a batch of pipes joined with "+"; ``System.residual_units`` where the
     System has them, else its blocks), and "nodes" (the node equations)."""
-    from dnasim.errors import ResidualDomainError
+    from dnasim.core.errors import ResidualDomainError
 
     clock = time.process_time
     units = getattr(system, "residual_units", system.blocks)

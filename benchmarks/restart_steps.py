@@ -8,7 +8,7 @@ for that first step, 0.5 / ||y'|| in the error weights, knows nothing of the ste
 sizes before the restart; ``NordsieckBDF.restart_step`` takes the order-1 step the
 polynomial before the restart allows. Each plant is run twice in this process
 (``dnasim.solver.bdf.RESTART_FROM_SOLUTION`` False, then True) through
-``dnasim.runner.run_plant`` as ``dnasim run`` does; printed: accepted steps,
+``dnasim.run.runner.run_plant`` as ``dnasim run`` does; printed: accepted steps,
 rejected steps (error test / Newton), residual evaluations, CPU seconds, and the
 change of the last output row against the first run (max over columns of
 |difference| / (|value| + 1e-3 max |column|)).
@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dnasim.plantfile import load
-from dnasim.runner import run_plant
+from dnasim.plant.plantfile import load
+from dnasim.run.runner import run_plant
 from dnasim.solver import bdf
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -33,7 +33,7 @@ the files carry no such key and each version gets the file's value as its own
 option. Everything else in the files is identical for both.
 
 BLAS threads: ``dnasim run`` now sets ``OPENBLAS_NUM_THREADS=1`` (and MKL's and
-Accelerate's) unless the environment sets it (``dnasim.entry.single_threaded_blas``);
+Accelerate's) unless the environment sets it (``dnasim.cli.entry.single_threaded_blas``);
 ea86a1d did not, so by default each version runs as shipped.
 ``--blas-threads 1`` gives both the same setting in their environment, which shows
 how much of the ratio is the BLAS thread pools' idle spinning (the baseline's CPU
@@ -170,7 +170,7 @@ def main(argv=None) -> int:
         default=None,
         help="the dnasim executable to compare with the baseline (default: this checkout's, "
         "next to this Python); e.g. a script running another checkout for a before/after: "
-        "PYTHONPATH=<checkout> python -P -c 'from dnasim.entry import main; main()' \"$@\" "
+        "PYTHONPATH=<checkout> python -P -c 'from dnasim.cli.entry import main; main()' \"$@\" "
         "(-P: else the current directory's dnasim comes first)",
     )
     ap.add_argument(

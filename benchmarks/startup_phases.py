@@ -5,19 +5,19 @@
 
 Each run is a fresh child process that installs timers around the functions of
 the run (wrappers, nothing else changed) and then runs the command line as
-``dnasim`` does (``dnasim.entry.main``). The phases, in CPU seconds
+``dnasim`` does (``dnasim.cli.entry.main``). The phases, in CPU seconds
 (``time.process_time``, all threads of the process):
 
 - ``python``: the interpreter and ``site`` before the first line of the driver
   (the process's CPU time at that point, ``resource.getrusage``);
-- ``cli``: importing ``click`` and ``dnasim.cli`` and parsing the options;
+- ``cli``: importing ``click`` and ``dnasim.cli.commands`` and parsing the options;
 - ``imports``: preparing the output directory and importing the modules of the
   run (numpy, scipy, dnasim's own) up to the medium;
 - ``medium``: creating the media (``dnasim.media.registry._create``): for Water
   importing numba and loading the compiled IF97 kernels from numba's cache;
 - ``parse``: the rest of ``load`` (reading TOML, building the components);
-- ``compile``: ``dnasim.compiler.compile`` (structure, matching, the System);
-- ``start``: the consistent initial values (``dnasim.start.initial_values``;
+- ``compile``: ``dnasim.compilation.compiler.compile`` (structure, matching, the System);
+- ``start``: the consistent initial values (``dnasim.start.initial.initial_values``;
   the steady start's Newton iterations), with their residual evaluations;
 - ``run``: the integration, less the rows;
 - ``rows``: computing and writing the rows of results.csv (``OutputRows.row`` and
@@ -79,22 +79,22 @@ def timed(owner, name, key):
     setattr(owner, name, wrapper)
 
 import click  # noqa
-import dnasim.cli  # noqa
+import dnasim.cli.commands  # noqa
 acc["cli"] = clock() - t0
-timed(dnasim.cli, "_prepare_output", "prepare")
-timed(dnasim.cli, "_coolprop_cache", "prepare")  # imports dnasim.plantfile
+timed(dnasim.cli.commands, "_prepare_output", "prepare")
+timed(dnasim.cli.commands, "_coolprop_cache", "prepare")  # imports dnasim.plant.plantfile
 
-orig_load = dnasim.cli._load
+orig_load = dnasim.cli.commands._load
 def load(plant_file):
     s = clock()
-    import dnasim.plantfile as pf
+    import dnasim.plant.plantfile as pf
     import dnasim.media.registry as reg
     timed(reg, "_create", "medium")
-    import dnasim.sinks as sinks
-    import dnasim.output as output
-    import dnasim.runner as runner
-    import dnasim.compiler as compiler
-    import dnasim.start as start
+    import dnasim.run.sinks as sinks
+    import dnasim.run.output as output
+    import dnasim.run.runner as runner
+    import dnasim.compilation.compiler as compiler
+    import dnasim.start.initial as start
     acc["imports"] = clock() - s
     timed(compiler, "compile", "compile")
     timed(start, "initial_values", "start")
@@ -108,9 +108,9 @@ def load(plant_file):
     r = orig_load(plant_file)
     acc["load"] = clock() - s
     return r
-dnasim.cli._load = load
+dnasim.cli.commands._load = load
 
-from dnasim.entry import main
+from dnasim.cli.entry import main
 code = main(sys.argv[1:])
 acc["end"] = clock() - t0 + t_python
 acc["python"] = t_python

@@ -54,7 +54,7 @@ def scaled_residual(system, t0, y, yp, fixed) -> float:
 
 
 def settled_difference(system, t0, y, T) -> str:
-    from dnasim.simulation import simulate
+    from dnasim.run.simulation import simulate
 
     try:
         res = simulate(
@@ -72,8 +72,8 @@ def settled_difference(system, t0, y, T) -> str:
 
 
 def one(path: Path, settle: float | None) -> tuple:
-    from dnasim.plantfile import load
-    from dnasim.steady_state import find_steady_state, fixed_mask
+    from dnasim.plant.plantfile import load
+    from dnasim.start.steady_state import find_steady_state, fixed_mask
 
     loaded = load(path)
     system = loaded.plant.compile()

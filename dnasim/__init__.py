@@ -9,7 +9,7 @@ The stages, each one object with one job (docs/architecture.md)::
     sw = sweep(spec, {"valve.C": [0.01, 0.02]}, executor=pool)   # many runs
 """
 
-from dnasim.errors import DAEError, DnasimError, PlantError, ResidualDomainError
+from dnasim.core.errors import DAEError, DnasimError, PlantError, ResidualDomainError
 
 __version__ = "0.1.0"
 
@@ -41,19 +41,19 @@ __all__ = [
 _LAZY = {
     "solve_dae": "dnasim.solver",
     "DAEResult": "dnasim.solver",
-    "load_plant": "dnasim.plantfile",
-    "Plant": "dnasim.plant",
-    "PlantSpec": "dnasim.spec",
-    "ComponentSpec": "dnasim.spec",
-    "SimulationSettings": "dnasim.spec",
-    "compile": "dnasim.compiler",
-    "System": "dnasim.system",
-    "simulate": "dnasim.simulation",
-    "NordsieckBDF": "dnasim.simulation",
-    "IDA": "dnasim.simulation",
-    "CSVSink": "dnasim.simulation",
-    "Results": "dnasim.results",
-    "sweep": "dnasim.sweeps",
+    "load_plant": "dnasim.plant.plantfile",
+    "Plant": "dnasim.plant.plant",
+    "PlantSpec": "dnasim.plant.spec",
+    "ComponentSpec": "dnasim.plant.spec",
+    "SimulationSettings": "dnasim.plant.spec",
+    "compile": "dnasim.compilation.compiler",
+    "System": "dnasim.compilation.system",
+    "simulate": "dnasim.run.simulation",
+    "NordsieckBDF": "dnasim.run.simulation",
+    "IDA": "dnasim.run.simulation",
+    "CSVSink": "dnasim.run.simulation",
+    "Results": "dnasim.run.results",
+    "sweep": "dnasim.tools.sweeps",
 }
 
 

@@ -1,7 +1,7 @@
-"""``python -m dnasim``: the command line (see ``dnasim.entry``)."""
+"""``python -m dnasim``: the command line (see ``dnasim.cli.entry``)."""
 
 import sys
 
-from dnasim.entry import main
+from dnasim.cli.entry import main
 
 sys.exit(main())

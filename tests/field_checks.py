@@ -2,7 +2,7 @@
 
 Used by ``tests/test_field.py`` (pytest) and ``benchmarks/field_tests.py`` (the table).
 Each plant in ``tests/field/*.toml`` is run as a user runs it, through the CLI in a
-fresh process (``python -m dnasim.cli run PLANT -o DIR -q``), and judged from
+fresh process (``python -m dnasim.cli.commands run PLANT -o DIR -q``), and judged from
 ``DIR/results.csv`` alone, against things nobody here wrote:
 
 - conservation over the whole run, from the running integrals in results.csv:
@@ -61,7 +61,7 @@ class Run:
     steps: int  # rows of steps.csv (accepted steps)
     wall: float  # wall time of the process [s]
     t_end: float  # the plant file's end time [s]
-    plant: object = None  # dnasim.plant.Plant (parameters in SI), None if it did not load
+    plant: object = None  # dnasim.plant.plant.Plant (parameters in SI), None if it did not load
     checks: list = field(default_factory=list)  # filled by evaluate()
 
     @property
@@ -90,7 +90,7 @@ def run_plant(name: str, outdir: Path) -> Run:
     outdir = Path(outdir)
     t0 = time.perf_counter()
     proc = subprocess.run(
-        [sys.executable, "-m", "dnasim.cli", "run", str(path), "-o", str(outdir), "-q"],
+        [sys.executable, "-m", "dnasim.cli.commands", "run", str(path), "-o", str(outdir), "-q"],
         capture_output=True,
         text=True,
     )
@@ -100,7 +100,7 @@ def run_plant(name: str, outdir: Path) -> Run:
 
 def collect(name: str, outdir: Path, returncode: int, message: str, wall: float) -> Run:
     """The Run of a finished CLI process whose output directory is ``outdir``."""
-    from dnasim.plantfile import load
+    from dnasim.plant.plantfile import load
 
     path = plant_path(name)
     outdir = Path(outdir)
@@ -149,7 +149,7 @@ def boundaries(plant) -> list[str]:
 def _legacy_signs() -> bool:
     """True while dnasim's boundaries count M_passed in the design direction (a sink's
     outflow positive); the components branch makes every boundary count into the plant."""
-    import dnasim.components.boundaries as b
+    import dnasim.library.boundaries as b
 
     return "out of it for a sink" in " ".join((b.__doc__ or "").split())
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from dnasim.components import HeatExchanger, MassFlowBoundary, Pipe, PressureBoundary
-from dnasim.plantfile import load, loads, simulate_plant
+from dnasim.library import HeatExchanger, MassFlowBoundary, Pipe, PressureBoundary
+from dnasim.plant.plantfile import load, loads, simulate_plant
 
 PLANTS = Path(__file__).resolve().parent / "plants"
 

@@ -18,10 +18,10 @@ import pytest
 from click.testing import CliRunner
 from CoolProp.CoolProp import PropsSI
 
-from dnasim.cli import main
-from dnasim.errors import PlantError
-from dnasim.output import read_results_csv
-from dnasim.plantfile import loads, simulate_plant
+from dnasim.cli.commands import main
+from dnasim.core.errors import PlantError
+from dnasim.plant.plantfile import loads, simulate_plant
+from dnasim.run.output import read_results_csv
 
 PLANT = Path(__file__).parent / "plants" / "cascade_level.toml"
 WATER = "IF97::Water"

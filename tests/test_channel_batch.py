@@ -1,4 +1,4 @@
-"""Pipes evaluated together (``PipeBatch``, ``dnasim.system.evaluation_units``) against
+"""Pipes evaluated together (``PipeBatch``, ``dnasim.compilation.system.evaluation_units``) against
 each pipe's own residual (``Pipe.residual``), to the bit.
 
 A batch evaluates the channel equations of several pipes as one set of arrays, with
@@ -12,11 +12,11 @@ volume).
 
 import numpy as np
 
-from dnasim.compiler import compile as compile_plant
-from dnasim.plantfile import loads
+from dnasim.compilation.compiler import compile as compile_plant
+from dnasim.compilation.system import evaluation_units
+from dnasim.plant.plantfile import loads
 from dnasim.solver.linear_algebra import SQRT_EPS, IterationMatrix
-from dnasim.start import initial_values
-from dnasim.system import evaluation_units
+from dnasim.start.initial import initial_values
 
 PLANT = """
 [plant]

@@ -1,5 +1,5 @@
 """The channel's fast helpers against the formulas they replace: the compiled LMTD of
-long channels (dnasim.components.lmtd_numba) against the numpy ``physics.lmtd`` (used
+long channels (dnasim.model.lmtd_numba) against the numpy ``physics.lmtd`` (used
 below ``LMTD_NUMBA_MIN`` elements), and ``physics.upwind_weight_pair`` against two
 calls of ``upwind_weight``.
 
@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dnasim.components import physics
+from dnasim.model import physics
 
-numba_lmtd = pytest.importorskip("dnasim.components.lmtd_numba")
+numba_lmtd = pytest.importorskip("dnasim.model.lmtd_numba")
 
 
 @pytest.mark.parametrize("scale", [0.1, 3.0, 50.0, 500.0, 1e5])

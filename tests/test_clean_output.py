@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
+from dnasim.cli.commands import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANTS = ROOT / "plants"

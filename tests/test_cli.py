@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.output import read_results_csv
+from dnasim.cli.commands import main
+from dnasim.run.output import read_results_csv
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANTS = ROOT / "plants"
@@ -215,7 +215,7 @@ def test_plot_of_a_missing_file_is_bad_input(tmp_path):
 
 
 def test_components_lists_the_library():
-    from dnasim.components import REGISTRY
+    from dnasim.library import REGISTRY
 
     res = invoke("components")
     assert res.exit_code == 0
@@ -254,7 +254,7 @@ def test_components_unknown_name():
 def test_help_is_fast_to_import():
     """`dnasim --help` must not import matplotlib or CoolProp."""
     code = (
-        "import sys; from dnasim.cli import main\n"
+        "import sys; from dnasim.cli.commands import main\n"
         "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
         "print([m for m in ('matplotlib', 'CoolProp', 'pandas') if m in sys.modules])"
     )
@@ -418,7 +418,7 @@ def _default_signals():
 
 def _start(plant, out):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    cmd = [sys.executable, "-c", "from dnasim.cli import main; main()", "run", str(plant)]
+    cmd = [sys.executable, "-c", "from dnasim.cli.commands import main; main()", "run", str(plant)]
     return subprocess.Popen(
         cmd + ["-o", str(out)],
         stdout=subprocess.PIPE,

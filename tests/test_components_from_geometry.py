@@ -27,11 +27,11 @@ import pytest
 from CoolProp.CoolProp import PropsSI
 from field_checks import Run, balances, read_results
 
-from dnasim.components.tube_geometry import Tubes
 from dnasim.correlations import friction, heat_transfer, metals, tube_banks
 from dnasim.correlations.condensation import nusselt_horizontal_tube
+from dnasim.library.submodels.tube_geometry import Tubes
 from dnasim.media import get_medium
-from dnasim.plantfile import load
+from dnasim.plant.plantfile import load
 
 G = 9.80665
 WATER = get_medium("Water")
@@ -39,13 +39,13 @@ ROOT_PLANTS = Path(__file__).resolve().parents[1] / "plants"
 
 
 def run_cli(tmp_path, name, text):
-    """Write the plant file, run it as a user does (``python -m dnasim.cli run``), and
+    """Write the plant file, run it as a user does (``python -m dnasim.cli.commands run``), and
     return the ``field_checks.Run`` (results.csv without units, the loaded plant)."""
     path = tmp_path / f"{name}.toml"
     path.write_text(textwrap.dedent(text))
     out = tmp_path / f"{name}_out"
     proc = subprocess.run(
-        [sys.executable, "-m", "dnasim.cli", "run", str(path), "-o", str(out), "-q"],
+        [sys.executable, "-m", "dnasim.cli.commands", "run", str(path), "-o", str(out), "-q"],
         capture_output=True,
         text=True,
     )

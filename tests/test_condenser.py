@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from plant_checks import balances, run_file
 
-from dnasim.components import MassFlowBoundary, PressureBoundary, Valve
-from dnasim.components.condenser import Condenser
-from dnasim.errors import PlantError
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.core.errors import PlantError
+from dnasim.library import MassFlowBoundary, PressureBoundary, Valve
+from dnasim.library.condenser import Condenser
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 IF97 = "IF97::Water"
 M_STEAM, H_STEAM = 10.0, 2.3e6  # exhaust [kg/s], [J/kg]
@@ -102,7 +102,7 @@ def test_condenser_run_closes_mass_and_energy():
 def test_given_duty_condenser_closes_its_balances():
     # duty mode: the heat leaves the plant (Q_passed); a duty cut at 100 s lets the
     # shell pressure rise (steam accumulates in the steam space)
-    from dnasim.timefunctions import Step
+    from dnasim.core.timefunctions import Step
 
     plant = condenser_plant(cooling="duty", Q=Step(100.0, 2.15e7, 1.8e7))
     res = plant.simulate(300.0, start="given", rtol=1e-6)

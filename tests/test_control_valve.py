@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from plant_checks import balances, run_file
 
-from dnasim.components import PressureBoundary
-from dnasim.components.control_valve import CheckValve, ControlValve
-from dnasim.errors import PlantError
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.core.errors import PlantError
+from dnasim.library import PressureBoundary
+from dnasim.library.control_valve import CheckValve, ControlValve
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 IF97 = "IF97::Water"
 KV = 50.0  # [m3/h]

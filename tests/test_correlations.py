@@ -335,7 +335,9 @@ def test_clapeyron_dp_sat_against_if97():
         Ts = PropsSI("T", "P", p, "Q", 0, "IF97::Water")
         rl = PropsSI("D", "P", p, "Q", 0, "IF97::Water")
         rv = PropsSI("D", "P", p, "Q", 1, "IF97::Water")
-        hlv = PropsSI("H", "P", p, "Q", 1, "IF97::Water") - PropsSI("H", "P", p, "Q", 0, "IF97::Water")
+        hlv = PropsSI("H", "P", p, "Q", 1, "IF97::Water") - PropsSI(
+            "H", "P", p, "Q", 0, "IF97::Water"
+        )
         for dT in (0.5, 5.0, 15.0, 30.0):
             exact = PropsSI("P", "T", Ts + dT, "Q", 0, "IF97::Water") - p
             got = float(boiling.clapeyron_dp_sat(dT, Ts, p, hlv, rl, rv))

@@ -9,10 +9,10 @@ import pytest
 from CoolProp.CoolProp import PropsSI
 from scipy.optimize import brentq
 
-from dnasim.components import MassFlowBoundary, PIController, PressureBoundary, Valve
-from dnasim.components.drum import Drum, FeedwaterTank
-from dnasim.plant import Plant
-from dnasim.plantfile import load, simulate_plant
+from dnasim.library import MassFlowBoundary, PIController, PressureBoundary, Valve
+from dnasim.library.drum import Drum, FeedwaterTank
+from dnasim.plant.plant import Plant
+from dnasim.plant.plantfile import load, simulate_plant
 
 ROOT = Path(__file__).resolve().parents[1]
 WATER = "IF97::Water"
@@ -331,7 +331,7 @@ def test_pi_start_mode_saturates_only_beyond_round_off(v, mode):
     # drum_boiler.toml starts with e = 0 and v = m_p + m_I = z_min = 0; a start Newton
     # that leaves v = -1.1e-44 must not choose "low" (its leave switch would start at 0
     # and never cross: the feed stayed off). Round-off is 1e-12 of the output range.
-    from dnasim.components.base import LocalVector
+    from dnasim.model.component import LocalVector
 
     pi = PIController("pi", Kp=0.02, KI=1e-4, setpoint=60.0, measured_nominal=60.0)
     x = LocalVector(np.array([0.0, v]), {"m_p": 0, "m_I": 1}, {"mode": "free"})

@@ -1,4 +1,4 @@
-"""One BLAS thread for simulations unless the user chose a number (``dnasim.blas_threads``).
+"""One BLAS thread for simulations unless the user chose a number (``dnasim.core.blas_threads``).
 
 The command line's setting only works if it is in the environment before numpy is
 imported (the OpenBLAS pools are made at import), so the tests check the value, that
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import scipy.sparse
 
-from dnasim.blas_threads import (
+from dnasim.core.blas_threads import (
     MIN_UNKNOWNS,
     THREAD_VARIABLES,
     one_blas_thread,
@@ -44,8 +44,8 @@ def test_numpy_is_imported_after_the_setting():
     # sees the variable in its environment
     code = (
         "import os, sys\n"
-        "import dnasim.entry as e\n"
-        "assert 'numpy' not in sys.modules, 'numpy imported with dnasim.entry'\n"
+        "import dnasim.cli.entry as e\n"
+        "assert 'numpy' not in sys.modules, 'numpy imported with dnasim.cli.entry'\n"
         "e.main(['--version'])\n"
         "import numpy\n"
         "print(os.environ['OPENBLAS_NUM_THREADS'])\n"

@@ -13,7 +13,7 @@ import pytest
 from CoolProp.CoolProp import PropsSI
 from field_checks import Run, balances, final, read_results
 
-from dnasim.plantfile import load
+from dnasim.plant.plantfile import load
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANT = ROOT / "plants" / "evaporator.toml"
@@ -26,7 +26,7 @@ def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("evaporator")
     t0 = time.perf_counter()
     proc = subprocess.run(
-        [sys.executable, "-m", "dnasim.cli", "run", str(PLANT), "-o", str(out), "-q"],
+        [sys.executable, "-m", "dnasim.cli.commands", "run", str(PLANT), "-o", str(out), "-q"],
         capture_output=True,
         text=True,
     )

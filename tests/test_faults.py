@@ -15,15 +15,15 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.errors import OutputError
-from dnasim.output import RESULT_FILES, StreamingCSV, read_results_csv
+from dnasim.cli.commands import main
+from dnasim.core.errors import OutputError
+from dnasim.run.output import RESULT_FILES, StreamingCSV, read_results_csv
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANTS = ROOT / "plants"
 AIR = (PLANTS / "air_pipe.toml").read_text()
 ATT = (PLANTS / "attemperator.toml").read_text()
-DNASIM = [sys.executable, "-m", "dnasim.cli"]
+DNASIM = [sys.executable, "-m", "dnasim.cli.commands"]
 
 
 def invoke(*args):
@@ -109,7 +109,7 @@ def test_results_csv_being_a_directory_is_a_located_error(tmp_path):
 
 def test_disk_full_truncates_to_the_last_whole_row(tmp_path, monkeypatch):
     """ENOSPC injected into the writer: half a block reaches the disk, then the error."""
-    import dnasim.output as output
+    import dnasim.run.output as output
 
     path = tmp_path / "r.csv"
     w = StreamingCSV(path, ["time [s]", "x [K]"], flush_rows=4, flush_seconds=1e9)
@@ -186,7 +186,7 @@ def test_controller_gain_accepts_only_inverse_temperature(tmp_path, value, words
 
 
 def test_controller_gain_in_inverse_temperature_is_read_per_kelvin():
-    from dnasim.plantfile import loads
+    from dnasim.plant.plantfile import loads
 
     for text, kp in (('"0.02 1/K"', 0.02), ('"0.02 1/degC"', 0.02), ('"0.01 1/degF"', 0.018)):
         spec = loads(ATT.replace('Kp = "0.02 1/K"', f"Kp = {text}")).spec
@@ -199,7 +199,7 @@ def test_temperature_difference_refuses_degC(tmp_path):
     text = AIR.replace("n_volumes = 1", 'n_volumes = 1\ndT_reg = "2 degC"')
     res = invoke("check", plant(tmp_path, text))
     assert_located(res, "key 'dT_reg'", "temperature difference", "'2 K'", "delta_degC")
-    from dnasim.plantfile import loads
+    from dnasim.plant.plantfile import loads
 
     for ok in ('"2 K"', '"2 delta_degC"', "2"):
         spec = loads(AIR.replace("n_volumes = 1", f"n_volumes = 1\ndT_reg = {ok}")).spec
@@ -233,8 +233,8 @@ def test_splitter_outlets_have_an_upper_limit(tmp_path):
 def test_output_points_are_capped_before_the_grid_exists(tmp_path):
     import tracemalloc
 
-    from dnasim.errors import PlantError
-    from dnasim.plantfile import loads
+    from dnasim.core.errors import PlantError
+    from dnasim.plant.plantfile import loads
 
     text = AIR.replace('t_end = "30 min"', 't_end = 1e9\noutput_interval = "1 s"')
     tracemalloc.start()
@@ -258,8 +258,8 @@ def test_max_steps_from_the_file_and_from_the_command_line(tmp_path):
 
 
 def test_streaming_run_keeps_no_rows_in_memory(tmp_path):
-    from dnasim.plantfile import load
-    from dnasim.runner import run_plant
+    from dnasim.plant.plantfile import load
+    from dnasim.run.runner import run_plant
 
     outcome = run_plant(load(PLANTS / "air_pipe.toml"), tmp_path / "o", flush_rows=10)
     assert outcome.success and outcome.rows > 10
@@ -371,7 +371,7 @@ def test_tabular_medium_is_announced_before_its_tables_are_built(tmp_path, monke
             return real("Water")  # the same fluid, without 15 s of table building
         return real(name, *a, **k)
 
-    import dnasim.cli as cli
+    import dnasim.cli.commands as cli
 
     real_notice = cli._tabular_notice
 
@@ -407,8 +407,8 @@ def test_an_unknown_component_type_hides_its_follow_on_errors(tmp_path):
 def test_small_tables_on_a_full_disk_leave_no_partial_file(tmp_path, monkeypatch):
     """events.csv/steps.csv go through a temporary file: ENOSPC while writing it leaves
     neither a torn table nor the temporary file, and names the table."""
-    import dnasim.output as output
-    from dnasim.output import write_steps_csv
+    import dnasim.run.output as output
+    from dnasim.run.output import write_steps_csv
 
     class Full:
         def __init__(self, f):
@@ -520,7 +520,7 @@ def test_steady_start_beyond_a_limit_saturates_and_says_so(tmp_path):
     # controller saturated, its held integral free. The start says both: the
     # controller that holds its limit and the valve whose law ignores choking.
     import dnasim
-    from dnasim.steady_state import find_steady_state
+    from dnasim.start.steady_state import find_steady_state
 
     spec = dnasim.load_plant(_attemperator_pi_file(tmp_path))
     spec.components["turbine"].params["p"] = 1000.0  # [Pa] = 0.01 bar
@@ -629,8 +629,8 @@ def _attemperator_with_pi(tmp_dir, **params):
     """The attemperator plant built from Python, its controller a PIController given
     ``params``; and the reference read from the plant file with a PIController."""
     import dnasim
-    from dnasim.components.controller import PIController
-    from dnasim.plant import Plant
+    from dnasim.library.controller import PIController
+    from dnasim.plant.plant import Plant
 
     ref = dnasim.load_plant(_attemperator_pi_file(tmp_dir))
     plant = Plant("att", medium="Water")
@@ -674,9 +674,9 @@ def test_controller_gain_from_python_refuses_what_a_plant_file_refuses(value, wo
 
 def test_controller_gain_per_bar_from_python_for_a_pressure_signal():
     import dnasim
-    from dnasim.components.base import Component, Equation, SignalPort, Variable
-    from dnasim.components.controller import PIController
-    from dnasim.plant import Plant
+    from dnasim.library.controller import PIController
+    from dnasim.model.component import Component, Equation, SignalPort, Variable
+    from dnasim.plant.plant import Plant
 
     class PressureSignal(Component):
         """A constant pressure signal p = 1e5 Pa (test only)."""
@@ -706,8 +706,8 @@ def test_cli_results_are_the_csv_sink_of_simulate(tmp_path):
     # simulate(sinks=[CSVSink]); over the set-point step at 2 min (a time event: a left
     # limit and a restart row) the two files are identical, byte for byte
     import dnasim
-    from dnasim.plantfile import load
-    from dnasim.simulation import CSVSink, simulate, simulation_keywords
+    from dnasim.plant.plantfile import load
+    from dnasim.run.simulation import CSVSink, simulate, simulation_keywords
 
     loaded = load(PLANTS / "attemperator.toml")
     loaded.simulation.t_end = 150.0

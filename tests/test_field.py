@@ -52,7 +52,7 @@ def test_balance_helper_sees_a_leak():
     import pandas as pd
     from field_checks import Run, balances, into_sign, plant_path
 
-    from dnasim.plantfile import load
+    from dnasim.plant.plantfile import load
 
     plant = load(plant_path("steam_network_step")).plant
     t = np.linspace(0.0, 10.0, 11)

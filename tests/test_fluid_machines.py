@@ -14,15 +14,15 @@ import pytest
 from plant_checks import balances, run_file
 from scipy.optimize import brentq
 
-from dnasim.components import PressureBoundary, Valve
-from dnasim.components.physics import G
-from dnasim.components.pump import Pump
-from dnasim.components.turbine import SteamTurbine
-from dnasim.errors import PlantError
+from dnasim.core.errors import PlantError
+from dnasim.library import PressureBoundary, Valve
+from dnasim.library.pump import Pump
+from dnasim.library.turbine import SteamTurbine
 from dnasim.media import get_medium
 from dnasim.media.isentropic import h_isentropic, h_ps
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.model.physics import G
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 IF97 = "IF97::Water"
 WATER = get_medium("Water")

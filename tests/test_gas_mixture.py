@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from dnasim.errors import PlantError, ResidualDomainError
+from dnasim.core.errors import PlantError, ResidualDomainError
 from dnasim.media import GasMixture, Medium, PropertyError, get_medium
 from dnasim.media.gas_mixture import (
     FLUE_GAS_DEFAULT,

@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from dnasim.compiler import compile as compile_plant
-from dnasim.plantfile import load
+from dnasim.compilation.compiler import compile as compile_plant
+from dnasim.plant.plantfile import load
 from dnasim.solver.linear_algebra import SQRT_EPS, IterationMatrix, colour_columns
-from dnasim.start import initial_values
+from dnasim.start.initial import initial_values
 
 PLANTS = Path(__file__).resolve().parent.parent / "plants"
 

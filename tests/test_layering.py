@@ -22,39 +22,55 @@ PACKAGE = Path(__file__).resolve().parent.parent / "dnasim"
 STAGES: list[tuple[str, list[str]]] = [
     (
         "foundation",
-        ["dnasim.errors", "dnasim.interrupts", "dnasim.timefunctions", "dnasim.blas_threads"],
+        [
+            "dnasim.core.errors",
+            "dnasim.core.interrupts",
+            "dnasim.core.timefunctions",
+            "dnasim.core.blas_threads",
+        ],
     ),
-    ("units", ["dnasim.units"]),
-    ("values", ["dnasim.values"]),
+    ("units", ["dnasim.core.units"]),
+    ("values", ["dnasim.core.values"]),
     ("media", ["dnasim.media", "dnasim.correlations"]),
     ("components", ["dnasim.components"]),
-    ("plugins", ["dnasim.plugins"]),
-    ("signals", ["dnasim.signals"]),
-    ("graph", ["dnasim.graph"]),
-    ("system", ["dnasim.system", "dnasim.structure", "dnasim.limits"]),
-    ("compiler", ["dnasim.compiler"]),
-    ("solver", ["dnasim.solver", "dnasim.initialization", "dnasim.initial_guess"]),
-    ("start", ["dnasim.start", "dnasim.steady_state"]),
-    ("results", ["dnasim.results", "dnasim.output", "dnasim.sinks"]),
-    ("backends", ["dnasim.backends"]),
-    ("simulation", ["dnasim.simulation"]),
-    ("plant", ["dnasim.plant"]),
-    ("spec", ["dnasim.spec"]),
-    ("plant files", ["dnasim.plantfile", "dnasim.examples"]),
-    ("cases", ["dnasim.cases"]),
+    ("plugins", ["dnasim.plant.plugins"]),
+    ("signals", ["dnasim.plant.signals"]),
+    ("graph", ["dnasim.plant.graph"]),
+    (
+        "system",
+        ["dnasim.compilation.system", "dnasim.compilation.structure", "dnasim.compilation.limits"],
+    ),
+    ("compiler", ["dnasim.compilation.compiler"]),
+    ("solver", ["dnasim.solver", "dnasim.start.consistent", "dnasim.start.guess"]),
+    ("start", ["dnasim.start.initial", "dnasim.start.steady_state"]),
+    ("results", ["dnasim.run.results", "dnasim.run.output", "dnasim.run.sinks"]),
+    ("backends", ["dnasim.run.backends"]),
+    ("simulation", ["dnasim.run.simulation"]),
+    ("plant", ["dnasim.plant.plant"]),
+    ("spec", ["dnasim.plant.spec"]),
+    ("plant files", ["dnasim.plant.plantfile", "dnasim.plant.examples"]),
+    ("cases", ["dnasim.plant.cases"]),
     (
         "runner",
         [
-            "dnasim.runner",
-            "dnasim.plantinfo",
-            "dnasim.plots",
-            "dnasim.linearize",
+            "dnasim.run.runner",
+            "dnasim.plant.plantinfo",
+            "dnasim.tools.plots",
+            "dnasim.tools.linearize",
             "dnasim.testing",
-            "dnasim.design_point",
+            "dnasim.tools.design_point",
         ],
     ),
-    ("tools", ["dnasim.sweeps", "dnasim.schematic", "dnasim.report", "dnasim.reference"]),
-    ("command line", ["dnasim.cli", "dnasim.entry", "dnasim.__main__", "dnasim"]),
+    (
+        "tools",
+        [
+            "dnasim.tools.sweeps",
+            "dnasim.tools.schematic",
+            "dnasim.tools.report",
+            "dnasim.tools.reference",
+        ],
+    ),
+    ("command line", ["dnasim.cli.commands", "dnasim.cli.entry", "dnasim.__main__", "dnasim"]),
 ]
 
 
@@ -92,7 +108,7 @@ def imports_of(name: str, path: Path, modules) -> list[tuple[str, int]]:
 
 def _is_main_block(node) -> bool:
     """``if __name__ == "__main__":``: what runs when the file is run as a program
-    (``python -m dnasim.cli``), not a dependency of the module."""
+    (``python -m dnasim.cli.commands``), not a dependency of the module."""
     t = node.test if isinstance(node, ast.If) else None
     return (
         isinstance(t, ast.Compare)
@@ -170,26 +186,26 @@ def test_the_check_finds_a_back_import(tmp_path):
     # component module is found, at its line, and it is against the stage order
     source = (PACKAGE / "components" / "valve.py").read_text()
     fake = tmp_path / "valve.py"
-    fake.write_text(source + "\n\ndef f():\n    from dnasim.simulation import simulate\n")
-    found = imports_of("dnasim.components.valve", fake, all_modules())
-    assert ("dnasim.simulation", source.count("\n") + 4) in found
-    assert stage_of("dnasim.simulation") > stage_of("dnasim.components.valve")
+    fake.write_text(source + "\n\ndef f():\n    from dnasim.run.simulation import simulate\n")
+    found = imports_of("dnasim.library.valve", fake, all_modules())
+    assert ("dnasim.run.simulation", source.count("\n") + 4) in found
+    assert stage_of("dnasim.run.simulation") > stage_of("dnasim.library.valve")
     # and one under `if __name__ == "__main__":` is not a dependency of the module
-    fake.write_text(source + '\nif __name__ == "__main__":\n    import dnasim.cli\n')
-    assert "dnasim.cli" not in [m for m, _ in imports_of("x", fake, all_modules())]
+    fake.write_text(source + '\nif __name__ == "__main__":\n    import dnasim.cli.commands\n')
+    assert "dnasim.cli.commands" not in [m for m, _ in imports_of("x", fake, all_modules())]
 
 
 @pytest.mark.parametrize(
     ("module", "forbidden"),
     [
-        ("dnasim.components.base", "dnasim.plantfile"),
-        ("dnasim.components.base", "dnasim.spec"),
-        ("dnasim.graph", "dnasim.compiler"),
-        ("dnasim.graph", "dnasim.simulation"),
-        ("dnasim.system", "dnasim.graph"),
-        ("dnasim.system", "dnasim.plant"),
-        ("dnasim.results", "dnasim.system"),
-        ("dnasim.media.if97", "dnasim.entry"),
+        ("dnasim.model.component", "dnasim.plant.plantfile"),
+        ("dnasim.model.component", "dnasim.plant.spec"),
+        ("dnasim.plant.graph", "dnasim.compilation.compiler"),
+        ("dnasim.plant.graph", "dnasim.run.simulation"),
+        ("dnasim.compilation.system", "dnasim.plant.graph"),
+        ("dnasim.compilation.system", "dnasim.plant.plant"),
+        ("dnasim.run.results", "dnasim.compilation.system"),
+        ("dnasim.media.if97", "dnasim.cli.entry"),
     ],
 )
 def test_known_back_references_are_gone(module, forbidden):

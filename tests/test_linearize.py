@@ -9,9 +9,9 @@ import scipy.signal
 import scipy.sparse as sp
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.linearize import LinearizeError, linearize
-from dnasim.plantfile import load
+from dnasim.cli.commands import main
+from dnasim.plant.plantfile import load
+from dnasim.tools.linearize import LinearizeError, linearize
 
 PLANTS = Path(__file__).parent / "plants"
 LAG = PLANTS / "lag_sensor.toml"
@@ -90,8 +90,8 @@ ATT = Path(__file__).parents[1] / "plants" / "attemperator.toml"
 
 
 def _steady_output(text, names):
-    from dnasim.plantfile import loads
-    from dnasim.start import initial_values
+    from dnasim.plant.plantfile import loads
+    from dnasim.start.initial import initial_values
 
     loaded = loads(text, "att.toml")
     system = loaded.plant.compile()

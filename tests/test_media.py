@@ -9,7 +9,7 @@ import pickle
 import numpy as np
 import pytest
 
-from dnasim.errors import PlantError, ResidualDomainError
+from dnasim.core.errors import PlantError, ResidualDomainError
 from dnasim.media import (
     CoolPropMedium,
     FluidState,

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dnasim.plantfile import load, simulate_plant
+from dnasim.plant.plantfile import load, simulate_plant
 
 ROOT = Path(__file__).resolve().parents[1]
 

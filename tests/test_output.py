@@ -1,4 +1,4 @@
-"""dnasim.output: streaming CSV, events/steps CSV, plots."""
+"""dnasim.run.output: streaming CSV, events/steps CSV, plots."""
 
 import csv
 import math
@@ -10,7 +10,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from dnasim.output import (
+from dnasim.run.output import (
     StreamingCSV,
     column_header,
     event_rows,
@@ -81,7 +81,7 @@ def test_killed_writer_leaves_parsable_csv(tmp_path):
     code = textwrap.dedent(
         f"""
         import os, signal
-        from dnasim.output import StreamingCSV
+        from dnasim.run.output import StreamingCSV
         w = StreamingCSV({str(path)!r}, ["time [s]", "a [-]", "b [-]"], flush_rows=7)
         for i in range(1000):
             w.write_row([i * 0.5, i, -i])
@@ -171,7 +171,7 @@ def test_select_variables():
 
 def test_plots_are_pngs(tmp_path):
     t = np.linspace(0, 600, 50)
-    from dnasim.plots import plot_quantities
+    from dnasim.tools.plots import plot_quantities
 
     data = {"a.T": 300 + t / 10, "b.m": np.sin(t)}
     p1 = plot_quantities(t, data, ["a.T", "b.m"], {"a.T": "K", "b.m": "kg/s"}, tmp_path / "v.png")

@@ -5,9 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dnasim.output import read_results_csv
-from dnasim.plantfile import loads
-from dnasim.runner import run_plant
+from dnasim.plant.plantfile import loads
+from dnasim.run.output import read_results_csv
+from dnasim.run.runner import run_plant
 
 PLANTS = Path(__file__).parent / "plants"
 
@@ -89,8 +89,8 @@ def test_left_limit_row_evaluates_time_functions_before_the_event(tmp_path, monk
     """At the set-point step (2 min) the row before holds the old set point in every
     column, the row after the new one. No component outputs a time function yet, so
     the PIController gets the set-point output proposed to the lead."""
-    from dnasim.components.base import Output
-    from dnasim.components.controller import PIController
+    from dnasim.library.controller import PIController
+    from dnasim.model.component import Output
 
     monkeypatch.setattr(PIController, "outputs", lambda self: [Output("setpoint", "K")])
     monkeypatch.setattr(

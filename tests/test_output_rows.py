@@ -6,11 +6,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dnasim.components import MassFlowBoundary, Pipe, PressureBoundary, Valve
-from dnasim.plant import Plant
-from dnasim.plantfile import load
-from dnasim.start import initial_values
-from dnasim.system import ComponentBlock
+from dnasim.compilation.system import ComponentBlock
+from dnasim.library import MassFlowBoundary, Pipe, PressureBoundary, Valve
+from dnasim.plant.plant import Plant
+from dnasim.plant.plantfile import load
+from dnasim.start.initial import initial_values
 
 PLANTS = Path(__file__).resolve().parent.parent / "plants"
 

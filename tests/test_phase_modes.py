@@ -3,14 +3,14 @@
 A volume's equation of state is kinked on the saturation lines (d rho/dh|_p jumps by a
 factor ~300 on the saturated-liquid line at 10 bar). Each volume keeps its phase as a
 discrete mode and is evaluated on that mode's branch, continued smoothly past the line,
-until the crossing is located (dnasim.components.channel, "Phase modes"); the branches
+until the crossing is located (dnasim.library.submodels.channel, "Phase modes"); the branches
 come from dnasim.media.if97_numba.ph_branch_scalar.
 """
 
 import numpy as np
 import pytest
 
-from dnasim.components.channel import AUTO, DOME, LIQUID, VAPOUR
+from dnasim.library.submodels.channel import AUTO, DOME, LIQUID, VAPOUR
 from dnasim.media import if97_numba as NB
 from dnasim.media.registry import get_medium
 
@@ -80,8 +80,8 @@ def test_states_with_branches_matches_the_scalar_kernel():
 
 def test_pipe_volumes_start_in_the_mode_of_their_state_and_switch_at_the_line():
     from dnasim import load_plant
-    from dnasim.compiler import compile as compile_plant
-    from dnasim.start import initial_values
+    from dnasim.compilation.compiler import compile as compile_plant
+    from dnasim.start.initial import initial_values
 
     plant = load_plant("tests/field/boiling_10bar.toml")
     system = compile_plant(plant)

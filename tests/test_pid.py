@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from dnasim.components.pid import PIDController
-from dnasim.components.signal_blocks import FirstOrderLag
-from dnasim.errors import PlantError
-from dnasim.plant import Plant
-from dnasim.timefunctions import Step, TimeFunction
+from dnasim.core.errors import PlantError
+from dnasim.core.timefunctions import Step, TimeFunction
+from dnasim.library.pid import PIDController
+from dnasim.library.signal_blocks import FirstOrderLag
+from dnasim.plant.plant import Plant
 
 K, T = 2.0, 10.0  # plant gain [1], time constant [s]
 RTOL, ATOL = 1e-9, 1e-11
@@ -229,7 +229,7 @@ def test_tracking_input_bounds_the_integral_at_an_external_limit():
     # the actuator (a Limiter [0, 1]) saturates outside the controller, whose own
     # limits are wide; with tracking = true the back-calculation uses the actuator
     # position: dm_I/dt = Kp e/T_i + (track - v)/T_t = (1 - m_I)/T_i in saturation
-    from dnasim.components.signal_blocks import Limiter
+    from dnasim.library.signal_blocks import Limiter
 
     plant = Plant("loop")
     plant.add(FirstOrderLag("G", T=T, k=K))

@@ -14,17 +14,17 @@ import numpy as np
 import pytest
 
 import dnasim
-from dnasim.compiler import compile as compile_plant
-from dnasim.errors import DAEError
-from dnasim.examples import air_pipe_plant, attemperator_plant
-from dnasim.graph import PlantGraph
-from dnasim.plantfile import load
-from dnasim.results import Results
-from dnasim.simulation import NordsieckBDF, simulate
-from dnasim.spec import ComponentSpec, PlantSpec
-from dnasim.start import initial_values
-from dnasim.system import System
-from dnasim.timefunctions import Step
+from dnasim.compilation.compiler import compile as compile_plant
+from dnasim.compilation.system import System
+from dnasim.core.errors import DAEError
+from dnasim.core.timefunctions import Step
+from dnasim.plant.examples import air_pipe_plant, attemperator_plant
+from dnasim.plant.graph import PlantGraph
+from dnasim.plant.plantfile import load
+from dnasim.plant.spec import ComponentSpec, PlantSpec
+from dnasim.run.results import Results
+from dnasim.run.simulation import NordsieckBDF, simulate
+from dnasim.start.initial import initial_values
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -223,7 +223,7 @@ def test_commands_on_air_do_not_import_coolprop(args):
         "import sys, runpy\n"
         f"sys.argv = ['dnasim'] + {args!r}\n"
         "try:\n"
-        "    runpy.run_module('dnasim.cli', run_name='__main__')\n"
+        "    runpy.run_module('dnasim.cli.commands', run_name='__main__')\n"
         "except SystemExit as e:\n"
         "    assert not e.code, e.code\n"
         "sys.stderr.write('COOLPROP=%s' % ('CoolProp' in sys.modules))\n"
@@ -244,9 +244,9 @@ def test_python_api_on_air_does_not_import_coolprop():
 
 
 def test_python_api_takes_unit_strings_and_the_same_checks_as_files():
-    from dnasim.components import PressureBoundary
-    from dnasim.errors import PlantError
-    from dnasim.plantfile import loads
+    from dnasim.core.errors import PlantError
+    from dnasim.library import PressureBoundary
+    from dnasim.plant.plantfile import loads
 
     b = PressureBoundary("src", p="120 bar", T="200 degC")
     assert b.param_at("p", 0.0) == 120e5 and b.param_at("T", 0.0) == pytest.approx(473.15)

@@ -4,9 +4,9 @@ saturation switch, and a cross-check against SUNDIALS IDA on the same residual."
 import numpy as np
 import pytest
 
-from dnasim.examples import attemperator_plant
-from dnasim.simulation import IDA
-from dnasim.start import initial_values
+from dnasim.plant.examples import attemperator_plant
+from dnasim.run.simulation import IDA
+from dnasim.start.initial import initial_values
 
 
 @pytest.fixture(scope="module")

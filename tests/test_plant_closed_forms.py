@@ -10,10 +10,10 @@ import math
 import numpy as np
 import pytest
 
-from dnasim.components import MassFlowBoundary, Pipe, PressureBoundary, Valve
+from dnasim.library import MassFlowBoundary, Pipe, PressureBoundary, Valve
 from dnasim.media import get_medium
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 CP = get_medium("Air").state(1e5, 3e5).cp
 

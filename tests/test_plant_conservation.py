@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from dnasim.components import PressureBoundary
-from dnasim.examples import air_pipe_plant
-from dnasim.timefunctions import Step
+from dnasim.core.timefunctions import Step
+from dnasim.library import PressureBoundary
+from dnasim.plant.examples import air_pipe_plant
 
 RTOL = 1e-7
 

@@ -10,10 +10,10 @@ import pytest
 from CoolProp.CoolProp import PropsSI
 from plant_checks import balances, run_file
 
-from dnasim.components import HeatExchanger, Pipe, PressureBoundary, Valve
-from dnasim.plant import Plant
-from dnasim.plantfile import loads, simulate_plant
-from dnasim.start import initial_values
+from dnasim.library import HeatExchanger, Pipe, PressureBoundary, Valve
+from dnasim.plant.plant import Plant
+from dnasim.plant.plantfile import loads, simulate_plant
+from dnasim.start.initial import initial_values
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -245,7 +245,7 @@ def test_phase_switches_are_declared_per_volume_when_asked():
     y, yp = initial_values(dae, 0.0, "steady")
     g = ev(0.0, y, yp)
     # subcooled water (500 .. 510 K at about 60 bar): each volume starts in the liquid
-    # mode (IF97: the phase is a discrete mode per volume, dnasim.components.channel),
+    # mode (IF97: the phase is a discrete mode per volume, dnasim.library.submodels.channel),
     # whose switch is g[2i] = h_liq(p) - h (positive while liquid; the vapour entry
     # is inactive, +1), against CoolProp's IF97 saturation enthalpies (independent of
     # the media module); 1e-6 relative covers the two IF97 implementations
@@ -293,7 +293,7 @@ def test_shipped_plants_close_mass_and_energy(name):
     # integrals and the heat to fixed walls; measured 1e-15 of the throughput, the
     # bound 1e-6 is the (the solver holds linear invariants to its Newton
     # tolerance, below rtol)
-    from dnasim.plantfile import load
+    from dnasim.plant.plantfile import load
 
     loaded = load(ROOT / "plants" / name)
     res = simulate_plant(loaded.plant, loaded.simulation)

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from dnasim.components import REGISTRY, Pipe
-from dnasim.examples import air_pipe_plant
-from dnasim.simulation import simulate
-from dnasim.timefunctions import Constant, Ramp, Sine, Step, Table, as_time_function
+from dnasim.core.timefunctions import Constant, Ramp, Sine, Step, Table, as_time_function
+from dnasim.library import REGISTRY, Pipe
+from dnasim.plant.examples import air_pipe_plant
+from dnasim.run.simulation import simulate
 
 
 @pytest.fixture(scope="module")

@@ -6,9 +6,9 @@ import warnings
 
 import numpy as np
 
-from dnasim.components.physics import friction_dp, lmtd, logarithmic_mean, softplus, valve_flow
-from dnasim.examples import attemperator_plant
-from dnasim.timefunctions import Table
+from dnasim.core.timefunctions import Table
+from dnasim.model.physics import friction_dp, lmtd, logarithmic_mean, softplus, valve_flow
+from dnasim.plant.examples import attemperator_plant
 
 
 def test_lmtd_exact_far_from_zero_and_plain_difference_when_equal():

@@ -13,10 +13,10 @@ import pytest
 from CoolProp.CoolProp import PropsSI
 from plant_checks import balances, node_temperatures, run_file
 
-from dnasim.components import Pipe, PressureBoundary, Valve
+from dnasim.library import Pipe, PressureBoundary, Valve
 from dnasim.media import get_medium
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 # ---------------------------------------------------------------- node identity
 

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from dnasim.components import (
+from dnasim.library import (
     REGISTRY,
     HeatExchanger,
     MassFlowBoundary,
@@ -23,9 +23,9 @@ from dnasim.components import (
     TemperatureSensor,
     Valve,
 )
-from dnasim.examples import air_pipe_plant, attemperator_plant
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.plant.examples import air_pipe_plant, attemperator_plant
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 
 def hx_plant():
@@ -92,10 +92,10 @@ def hx_plant():
 def signals_plant():
     """A water line with every sensor on it, a PID (manual until 0.5 s, so the
     probe at t = 1 s sees it automatic) and every signal block in a chain."""
-    from dnasim.components import sensor as S
-    from dnasim.components import signal_blocks as B
-    from dnasim.components.pid import PIDController
-    from dnasim.timefunctions import Step
+    from dnasim.core.timefunctions import Step
+    from dnasim.library import sensor as S
+    from dnasim.library import signal_blocks as B
+    from dnasim.library.pid import PIDController
 
     plant = Plant("signals", medium="Water")
     plant.add(PressureBoundary("src", p=10e5, T=350.0, m_nominal=1.0))
@@ -152,7 +152,7 @@ def plant_file(name):
     """A plant of tests/plants (the fluid machines, valves and the condenser)."""
     from pathlib import Path
 
-    from dnasim.plantfile import load
+    from dnasim.plant.plantfile import load
 
     return load(Path(__file__).parent / "plants" / name).plant
 
@@ -160,7 +160,7 @@ def plant_file(name):
 def relief_plant():
     """A popped safety valve part-way up its lift curve (the lift depends on the inlet
     pressure there), steam from a 102 bar header to the atmosphere."""
-    from dnasim.components.safety_valve import SafetyValve
+    from dnasim.library.safety_valve import SafetyValve
 
     plant = Plant("relief", medium="Water")
     plant.add(PressureBoundary("header", p=102e5, T=650.0, m_nominal=5.0))
@@ -267,7 +267,7 @@ def test_equations_are_declared_once(cls, params):
     # the docs or the sparsity, which test_declared_pattern_covers_probed checks):
     # every Equation's own function, or (a class with row_reads, issue 10) the
     # class's row_values and no Equation function
-    from dnasim.components.base import Component
+    from dnasim.model.component import Component
 
     comp = cls("c", **params)
     eqs = comp.equations()

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from dnasim.components import (
+from dnasim.core.errors import PlantError
+from dnasim.library import (
     Component,
     Equation,
     FluidPort,
@@ -13,9 +14,8 @@ from dnasim.components import (
     Valve,
     Variable,
 )
-from dnasim.errors import PlantError
-from dnasim.examples import air_pipe_plant, attemperator_plant
-from dnasim.plant import Plant
+from dnasim.plant.examples import air_pipe_plant, attemperator_plant
+from dnasim.plant.plant import Plant
 
 
 class _Resistor(Component):
@@ -142,7 +142,7 @@ def test_two_volumes_without_resistance_is_explained():
 
 def test_two_storage_volumes_joined():
     # a pipe's outlet volume joined to an attemperator's spray inlet (p_water = p)
-    from dnasim.components import Attemperator
+    from dnasim.library import Attemperator
 
     plant = Plant("bad2", medium="Water")
     plant.add(PressureBoundary("w", p=60e5, T=400.0))

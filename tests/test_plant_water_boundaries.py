@@ -12,7 +12,7 @@
    with a message naming the boundary and the state; the quality x is a third way
    to give the supply state.
 
-Runs go through ``dnasim.runner.run_plant``, the path of ``dnasim run``.
+Runs go through ``dnasim.run.runner.run_plant``, the path of ``dnasim run``.
 """
 
 from __future__ import annotations
@@ -24,12 +24,12 @@ import numpy as np
 import pytest
 from CoolProp.CoolProp import PropsSI
 
-from dnasim.components import Pipe, PressureBoundary, Valve
-from dnasim.errors import PlantError
-from dnasim.output import read_results_csv
-from dnasim.plant import Plant
-from dnasim.plantfile import loads
-from dnasim.runner import run_plant
+from dnasim.core.errors import PlantError
+from dnasim.library import Pipe, PressureBoundary, Valve
+from dnasim.plant.plant import Plant
+from dnasim.plant.plantfile import loads
+from dnasim.run.output import read_results_csv
+from dnasim.run.runner import run_plant
 
 FIELD = Path(__file__).resolve().parent / "field"
 WATER = "IF97::Water"
@@ -136,7 +136,7 @@ def test_quality_out_of_range_and_two_supply_states_are_refused():
 
 
 def test_supply_at_saturation_names_the_boundary():
-    from dnasim.components.boundaries import BoundaryStateError, saturation_temperature
+    from dnasim.library.boundaries import BoundaryStateError, saturation_temperature
     from dnasim.media import get_medium
 
     water = get_medium("Water")

@@ -1,13 +1,13 @@
-"""dnasim.plantfile: TOML -> validated description -> Plant. Validation before numerics."""
+"""dnasim.plant.plantfile: TOML -> validated description -> Plant. Validation before numerics."""
 
 import os
 import textwrap
 
 import pytest
 
-from dnasim.errors import PlantError
-from dnasim.plantfile import _decode, load, parse_plant
-from dnasim.timefunctions import Ramp, Sine, Step, Table
+from dnasim.core.errors import PlantError
+from dnasim.core.timefunctions import Ramp, Sine, Step, Table
+from dnasim.plant.plantfile import _decode, load, parse_plant
 
 BASE = textwrap.dedent(
     """\
@@ -540,7 +540,7 @@ def test_random_mutations_never_give_a_traceback():
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st
 
-    from dnasim.cli import main
+    from dnasim.cli.commands import main
 
     plant_file = Path(__file__).resolve().parents[1] / "plants" / "attemperator.toml"
     base = tomllib.loads(plant_file.read_text())
@@ -581,7 +581,7 @@ def test_load_plant_gives_the_python_api_plant():
     from pathlib import Path
 
     import dnasim
-    from dnasim.plant import Plant
+    from dnasim.plant.plant import Plant
 
     plant = dnasim.load_plant(Path(__file__).resolve().parents[1] / "plants" / "air_pipe.toml")
     assert isinstance(plant, Plant)
@@ -604,7 +604,7 @@ def test_docs_example_is_a_valid_plant():
     example = re.search(r"```toml\n(.*?)```", doc, re.S).group(1)
     spec = spec_of(example, "docs/plant_files.md")
     assert {c.name for c in spec.components} >= {"steam", "att", "pi", "turbine"}
-    from dnasim.plantfile import build_plant
+    from dnasim.plant.plantfile import build_plant
 
     report = build_plant(spec).check()
     assert report.ok, str(report)

@@ -6,14 +6,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dnasim.errors import PlantError
-from dnasim.plantfile import load
+from dnasim.core.errors import PlantError
+from dnasim.plant.plantfile import load
 
 ROOT = Path(__file__).resolve().parent.parent
 
 # a user's component: a square-root valve whose flow is scaled by a fixed factor
 PLUGIN = '''
-from dnasim.components import Param, Valve
+from dnasim.library import Param, Valve
 
 
 class {cls}(Valve):

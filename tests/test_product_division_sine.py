@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.components.signal_blocks import Division, Product, Sine, unit_product, unit_quotient
-from dnasim.errors import PlantError
+from dnasim.cli.commands import main
+from dnasim.core.errors import PlantError
+from dnasim.library.signal_blocks import Division, Product, Sine, unit_product, unit_quotient
 
 PLANT = Path(__file__).resolve().parent / "plants" / "signal_blocks_sine.toml"
 

@@ -15,15 +15,15 @@ from click.testing import CliRunner
 from CoolProp.CoolProp import PropsSI
 from scipy.optimize import brentq
 
-from dnasim.cli import main
-from dnasim.components import ControlValve, PressureBoundary
-from dnasim.components.physics import G, reverse_fraction, upwind_weight
-from dnasim.components.pump import Pump
+from dnasim.cli.commands import main
+from dnasim.library import ControlValve, PressureBoundary
+from dnasim.library.pump import Pump
 from dnasim.media import get_medium
-from dnasim.output import read_results_csv
-from dnasim.plant import Plant
-from dnasim.plantfile import load
-from dnasim.start import initial_values
+from dnasim.model.physics import G, reverse_fraction, upwind_weight
+from dnasim.plant.plant import Plant
+from dnasim.plant.plantfile import load
+from dnasim.run.output import read_results_csv
+from dnasim.start.initial import initial_values
 
 PLANT = Path(__file__).parent / "plants" / "pump_cavitation.toml"
 IF97 = "IF97::Water"

@@ -19,10 +19,10 @@ from click.testing import CliRunner
 from CoolProp.CoolProp import PropsSI
 from scipy.optimize import brentq
 
-from dnasim.cli import main
-from dnasim.errors import PlantError
-from dnasim.output import read_results_csv
-from dnasim.plantfile import loads
+from dnasim.cli.commands import main
+from dnasim.core.errors import PlantError
+from dnasim.plant.plantfile import loads
+from dnasim.run.output import read_results_csv
 
 PLANT = Path(__file__).parent / "plants" / "pump_shutoff.toml"
 WATER = "IF97::Water"

@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 from CoolProp.CoolProp import PropsSI
 
-from dnasim.initial_guess import initial_guess
-from dnasim.plantfile import load, simulate_plant
+from dnasim.plant.plantfile import load, simulate_plant
+from dnasim.start.guess import initial_guess
 
 ROOT = Path(__file__).resolve().parents[1]
 WATER = "IF97::Water"

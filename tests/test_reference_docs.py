@@ -2,11 +2,11 @@
 
 from pathlib import Path
 
-from dnasim.reference import component_reference_markdown
+from dnasim.tools.reference import component_reference_markdown
 
 
 def test_component_reference_is_up_to_date():
     committed = (Path(__file__).resolve().parent.parent / "docs" / "components.md").read_text()
     assert committed == component_reference_markdown(), (
-        "docs/components.md is stale: run `python -m dnasim.reference > docs/components.md`"
+        "docs/components.md is stale: run `python -m dnasim.tools.reference > docs/components.md`"
     )

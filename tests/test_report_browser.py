@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
+from dnasim.cli.commands import main
 
 PLANTS = Path(__file__).parents[1] / "plants"
 CHROMIUM = next(

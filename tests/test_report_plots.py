@@ -24,9 +24,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.output import read_results_csv
-from dnasim.plots import default_selection, display, merge_identical, quantity_of
+from dnasim.cli.commands import main
+from dnasim.run.output import read_results_csv
+from dnasim.tools.plots import default_selection, display, merge_identical, quantity_of
 
 PLANTS = Path(__file__).parents[1] / "plants"
 
@@ -93,7 +93,7 @@ def test_report_is_small_and_loads_plotly_from_its_folder(run_dir):
     assert not re.search(r"(src|href)=['\"]?(https?:)?//", text)
     assert not re.search(r"<link[^>]+href=", text) and "@import" not in text
     js = run_dir / "plotly.min.js"
-    from dnasim.report import _plotly_source
+    from dnasim.tools.report import _plotly_source
 
     assert js.read_bytes() == _plotly_source()
     # the run and the report's sections
@@ -102,7 +102,7 @@ def test_report_is_small_and_loads_plotly_from_its_folder(run_dir):
 
 
 def test_plotly_is_written_once_per_folder(run_dir, tmp_path):
-    from dnasim.report import write_plotly_js
+    from dnasim.tools.report import write_plotly_js
 
     js = run_dir / "plotly.min.js"
     stat = js.stat()
@@ -149,7 +149,7 @@ def test_browser_groups_by_component_and_quantity(run_dir):
 
 
 def test_schematic_holds_every_component_node_and_link(run_dir):
-    import dnasim.plantfile as pf
+    import dnasim.plant.plantfile as pf
 
     plant = pf.load(PLANTS / "attemperator.toml").plant
     svg = svg_of((run_dir / "report.html").read_text())
@@ -207,9 +207,9 @@ def test_schematic_holds_every_component_node_and_link(run_dir):
 def test_schematic_of_a_closed_loop_and_two_fluids(tmp_path):
     """The Rankine cycle's loop is broken at the pump: pump, economiser, drum,
     superheater, turbine and condenser from left to right; flue gas lines are gas."""
-    from dnasim.plantfile import load
-    from dnasim.plantinfo import describe_loaded
-    from dnasim.schematic import layout, schematic_svg
+    from dnasim.plant.plantfile import load
+    from dnasim.plant.plantinfo import describe_loaded
+    from dnasim.tools.schematic import layout, schematic_svg
 
     loaded = load(PLANTS / "rankine.toml")
     desc = describe_loaded(loaded, loaded.plant.compile())
@@ -249,7 +249,7 @@ def test_event_table_collapses_under_a_summary(runs):
 
 
 def test_event_summary_counts_locations_not_iterates():
-    from dnasim.report import event_summary
+    from dnasim.tools.report import event_summary
 
     header = ["event", "iteration", "time", "switch_value", "component", "switch"]
     rows = [
@@ -280,11 +280,11 @@ EVIL = '<img src=x onerror="alert(1)">'
 def test_no_markup_from_plant_strings(tmp_path):
     """Names, description and node names full of markup stay text: no element, no
     event handler, no script comes from them (the page, the SVG and the JSON)."""
-    from dnasim.components import Pipe, PressureBoundary, Valve
-    from dnasim.plant import Plant
-    from dnasim.plantfile import load
-    from dnasim.report import write_report
-    from dnasim.runner import run_plant
+    from dnasim.library import Pipe, PressureBoundary, Valve
+    from dnasim.plant.plant import Plant
+    from dnasim.plant.plantfile import load
+    from dnasim.run.runner import run_plant
+    from dnasim.tools.report import write_report
 
     base = load(PLANTS / "air_pipe.toml")
     p = Plant('<script>alert("plant")</script>', medium="Air")
@@ -342,8 +342,8 @@ def test_run_plot_and_plot_command_write_the_same_files(run_dir):
 
 
 def panels_of(out: Path):
-    from dnasim.plantinfo import read_plant_json
-    from dnasim.plots import select_panels
+    from dnasim.plant.plantinfo import read_plant_json
+    from dnasim.tools.plots import select_panels
 
     names, units, data = read_results_csv(out / "results.csv")
     plant = read_plant_json(out)
@@ -353,7 +353,7 @@ def panels_of(out: Path):
 
 
 def assert_one_unit_per_axis(panels, units, data):
-    from dnasim.plots import is_constant
+    from dnasim.tools.plots import is_constant
 
     for p in panels:
         assert {units[n] for n in p.names} == {p.unit}, (p.quantity, p.names)
@@ -438,7 +438,7 @@ def test_evaporator_selection(runs):
 def test_no_two_units_share_an_axis():
     """Set points and errors of controllers that measure different quantities
     (main put 'set point [m]' over a bar and a metre set point)."""
-    from dnasim.plots import select_panels
+    from dnasim.tools.plots import select_panels
 
     names = [
         "lc.e", "lc.z", "lc.m_I", "lc.setpoint", "pc.e", "pc.z", "pc.m_I", "pc.setpoint",
@@ -481,7 +481,7 @@ def test_no_two_units_share_an_axis():
 
 
 def test_vars_still_choose_and_engineering_units_still_convert(runs, tmp_path):
-    from dnasim.plots import panels_for
+    from dnasim.tools.plots import panels_for
 
     out = runs("drum_boiler")
     names, units, data = read_results_csv(out / "results.csv")
@@ -507,7 +507,7 @@ def test_vars_still_choose_and_engineering_units_still_convert(runs, tmp_path):
 def test_plot_title_is_the_plant_name(runs, tmp_path, monkeypatch):
     """The title is the plant's name and description (plant.json), also for
     `dnasim plot` on a copied folder; not the CSV's path."""
-    import dnasim.plots as plots
+    import dnasim.tools.plots as plots
 
     out = runs("drum_boiler")
     copy = tmp_path / "copied"
@@ -571,7 +571,7 @@ def test_default_selection_and_merging(run_dir):
 
 
 def test_bands_that_do_not_overlap_get_their_own_panel():
-    from dnasim.plots import split_bands
+    from dnasim.tools.plots import split_bands
 
     data = {
         "water": np.full(5, 473.0),
@@ -598,7 +598,7 @@ def test_bands_that_do_not_overlap_get_their_own_panel():
 
 
 def test_flat_curves_do_not_magnify_round_off():
-    from dnasim.plots import y_limits
+    from dnasim.tools.plots import y_limits
 
     flat = 633.15 + 1e-10 * np.sin(np.arange(50))
     lo, hi = y_limits([flat])
@@ -608,7 +608,7 @@ def test_flat_curves_do_not_magnify_round_off():
 
 
 def test_constants():
-    from dnasim.plots import is_constant
+    from dnasim.tools.plots import is_constant
 
     # 1e-5 of the magnitude: 1 mbar of 100 bar is constant, 10 mbar is not
     assert is_constant(1e7 + np.array([0.0, 90.0]), 0.0, "Pa")

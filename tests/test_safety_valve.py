@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.components.base import LocalVector
-from dnasim.components.safety_valve import SafetyValve
-from dnasim.components.valve_laws import NAPIER_SI, critical_pressure_ratio, napier_flow
-from dnasim.errors import PlantError
+from dnasim.cli.commands import main
+from dnasim.core.errors import PlantError
+from dnasim.library.safety_valve import SafetyValve
+from dnasim.library.submodels.valve_laws import NAPIER_SI, critical_pressure_ratio, napier_flow
 from dnasim.media import get_medium
+from dnasim.model.component import LocalVector
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANT = ROOT / "plants" / "turbine_trip_safety_valve.toml"

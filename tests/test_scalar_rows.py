@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dnasim.components.base import ScalarRows
-from dnasim.initial_guess import initial_guess
-from dnasim.plantfile import load
-from dnasim.start import initial_values
+from dnasim.model.component import ScalarRows
+from dnasim.plant.plantfile import load
+from dnasim.start.guess import initial_guess
+from dnasim.start.initial import initial_values
 
 PLANTS = Path(__file__).resolve().parent.parent / "plants"
 ALL = sorted(p.stem for p in PLANTS.glob("*.toml"))
@@ -126,7 +126,7 @@ def pid_loop(pid):
     G's output when asked."""
     from test_pid import loop
 
-    from dnasim.timefunctions import Step
+    from dnasim.core.timefunctions import Step
 
     if pid.get("active") == "manual_then_auto":
         pid = dict(pid, active=Step(100.0, 0.0, 1.0))
@@ -182,15 +182,15 @@ def sensor_plant():
     MassFlowBoundary at c whose flow is the signal of the quality sensor (m_scale
     0.1: the subcooled water's quality is negative, so the tap, a sink only, takes
     water out; with -0.1 it fed the plant, which no state at rest may do)."""
-    from dnasim.components import MassFlowBoundary, PressureBoundary, Valve
-    from dnasim.components.sensor import (
+    from dnasim.library import MassFlowBoundary, PressureBoundary, Valve
+    from dnasim.library.sensor import (
         EnthalpySensor,
         MassFlowSensor,
         PressureSensor,
         QualitySensor,
         TemperatureSensor,
     )
-    from dnasim.plant import Plant
+    from dnasim.plant.plant import Plant
 
     plant = Plant("sensors", medium="Water")
     plant.add(PressureBoundary("src", p=10e5, T=440.0))
@@ -261,8 +261,8 @@ def test_sensors_and_flow_boundaries_rows():
 
 
 def linear_valve_plant(cls):
-    from dnasim.components import PressureBoundary
-    from dnasim.plant import Plant
+    from dnasim.library import PressureBoundary
+    from dnasim.plant.plant import Plant
 
     plant = Plant("linear", medium="Air")
     plant.add(PressureBoundary("src", p=2e5, T=300.0))
@@ -283,7 +283,7 @@ def test_a_subclass_that_overrides_row_values_has_its_law_on_both_paths():
     # row_values: the System evaluates it in the ScalarRows unit, Component.residual
     # derives from the same function, so both give its law (fails if either path
     # still used Valve's law)
-    from dnasim.components import Valve
+    from dnasim.library import Valve
 
     class LinearValve(Valve):
         REGISTER = False
@@ -305,9 +305,9 @@ def test_a_subclass_that_overrides_row_values_has_its_law_on_both_paths():
 def test_an_equation_written_twice_is_refused():
     # a subclass that gives its equations residual functions but inherits row_reads
     # would have two definitions (its functions would be silently ignored): PlantError
-    from dnasim.components import Valve
-    from dnasim.components.base import Equation
-    from dnasim.errors import PlantError
+    from dnasim.core.errors import PlantError
+    from dnasim.library import Valve
+    from dnasim.model.component import Equation
 
     class TwiceValve(Valve):
         REGISTER = False

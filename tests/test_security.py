@@ -24,9 +24,9 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.errors import PlantError
-from dnasim.output import read_results_csv, write_events_csv
+from dnasim.cli.commands import main
+from dnasim.core.errors import PlantError
+from dnasim.run.output import read_results_csv, write_events_csv
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANTS = ROOT / "plants"
@@ -35,7 +35,7 @@ LAG = (
     .read_text()
     .replace('t_end = "60 s"', 't_end = "20 s"')
 )
-DNASIM = [sys.executable, "-m", "dnasim.cli"]
+DNASIM = [sys.executable, "-m", "dnasim.cli.commands"]
 
 
 def invoke(*args):
@@ -89,7 +89,7 @@ def test_a_plant_file_runs_no_code_without_the_opt_in(tmp_path):
         assert res.output.count("dnasim: error") == 1  # one paragraph
         assert not (tmp_path / "RAN").exists(), args
     with pytest.raises(PlantError, match="not imported"):
-        from dnasim.plantfile import load
+        from dnasim.plant.plantfile import load
 
         load(path)
     assert not (tmp_path / "RAN").exists()
@@ -135,8 +135,8 @@ def test_a_sweep_runs_again_after_the_plant_or_a_setting_changed(tmp_path):
 
 
 def test_collect_reads_only_folders_of_this_plant(tmp_path):
-    from dnasim import sweeps
-    from dnasim.plantfile import loads
+    from dnasim.plant.plantfile import loads
+    from dnasim.tools import sweeps
 
     spec = loads(LAG, "lag.toml").spec
     cases = [{"sensor.tau": "4 s"}]
@@ -341,7 +341,7 @@ def test_scheduler_addresses_are_checked(tmp_path, address, words):
 
 
 def test_every_csv_cell_is_safe_for_spreadsheets(tmp_path):
-    from dnasim.output import spreadsheet_safe
+    from dnasim.run.output import spreadsheet_safe
 
     assert spreadsheet_safe('=HYPERLINK("http://x")') == '\'=HYPERLINK("http://x")'
     for text in ("@SUM(A1)", "+cmd", "-cmd", "\tx", "\rx"):

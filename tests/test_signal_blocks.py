@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from dnasim.components.boundaries import PressureBoundary
-from dnasim.components.sensor import (
+from dnasim.core.errors import PlantError
+from dnasim.library.boundaries import PressureBoundary
+from dnasim.library.sensor import (
     EnthalpySensor,
     LevelSensor,
     MassFlowSensor,
@@ -17,7 +18,7 @@ from dnasim.components.sensor import (
     QualitySensor,
     TemperatureSensor,
 )
-from dnasim.components.signal_blocks import (
+from dnasim.library.signal_blocks import (
     DeadTime,
     FirstOrderLag,
     Gain,
@@ -29,9 +30,8 @@ from dnasim.components.signal_blocks import (
     Table,
     TableSource,
 )
-from dnasim.components.valve import Valve
-from dnasim.errors import PlantError
-from dnasim.plant import Plant
+from dnasim.library.valve import Valve
+from dnasim.plant.plant import Plant
 
 TOL = 1e-6
 
@@ -189,7 +189,7 @@ def test_bad_block_parameters(make, words):
 
 def _line(sensors, links=()):
     """10 bar -> valve -> 1 bar water; the supply pressure steps to 12 bar at t = 1 s."""
-    from dnasim.timefunctions import Step as StepF
+    from dnasim.core.timefunctions import Step as StepF
 
     plant = Plant("line", medium="Water")
     plant.add(PressureBoundary("src", p=StepF(1.0, 10e5, 12e5), T=350.0, m_nominal=1.0))

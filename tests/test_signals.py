@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
-from dnasim.errors import PlantError
-from dnasim.output import read_results_csv
-from dnasim.plantfile import loads
+from dnasim.cli.commands import main
+from dnasim.core.errors import PlantError
+from dnasim.plant.plantfile import loads
+from dnasim.run.output import read_results_csv
 
 PLANTS = Path(__file__).parent / "plants"
 PRESSURE = (PLANTS / "pressure_loop.toml").read_text()
@@ -174,8 +174,8 @@ def test_controller_measuring_its_own_output(tmp_path, controller):
 
 
 def test_python_api_links_and_errors():
-    from dnasim.components.signal_blocks import FirstOrderLag, Gain
-    from dnasim.plant import Plant
+    from dnasim.library.signal_blocks import FirstOrderLag, Gain
+    from dnasim.plant.plant import Plant
 
     plant = Plant("p")
     plant.add(FirstOrderLag("f", T=1.0))
@@ -201,9 +201,9 @@ def test_python_api_links_and_errors():
 
 
 def test_python_api_valve_with_opening_and_link_says_so():
-    from dnasim.components.signal_blocks import Step
-    from dnasim.components.valve import Valve
-    from dnasim.plant import Plant
+    from dnasim.library.signal_blocks import Step
+    from dnasim.library.valve import Valve
+    from dnasim.plant.plant import Plant
 
     plant = Plant("x")
     plant.add(Valve("v", C=1e-3, opening=0.5))
@@ -213,8 +213,8 @@ def test_python_api_valve_with_opening_and_link_says_so():
 
 
 def test_a_block_fed_by_its_own_output_is_a_loop():
-    from dnasim.components.signal_blocks import Gain
-    from dnasim.plant import Plant
+    from dnasim.library.signal_blocks import Gain
+    from dnasim.plant.plant import Plant
 
     plant = Plant("self")
     plant.add(Gain("g", k=0.5))
@@ -298,7 +298,7 @@ def test_flow_loop_starts_steady_at_its_set_point(tmp_path):
 
 
 def test_steady_guess_interpolates_node_pressures_between_boundaries():
-    from dnasim.initial_guess import initial_guess
+    from dnasim.start.guess import initial_guess
 
     system = loads(PRESSURE, "p.toml").plant.compile()
     y_steady = initial_guess(system, 0.0, interpolate=True)

@@ -132,7 +132,7 @@ def test_failures_are_reported_alike_by_solve_dae_and_simulate():
     # throw=True; the default is the same in both
     import inspect
 
-    from dnasim.simulation import simulate
+    from dnasim.run.simulation import simulate
 
     for f in (solve_dae, simulate):
         assert inspect.signature(f).parameters["throw"].default is False

@@ -7,10 +7,10 @@ import pytest
 import scipy.sparse as sp
 
 from dnasim import DAEError, solve_dae
-from dnasim.errors import PlantError
-from dnasim.initialization import solve_mixed
+from dnasim.core.errors import PlantError
 from dnasim.solver.initial import solve_consistent
 from dnasim.solver.linear_algebra import IterationMatrix
+from dnasim.start.consistent import solve_mixed
 
 EPS = np.finfo(float).eps
 A, B, C = 1.1, 3.3, 0.7

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dnasim.errors import DAEError
+from dnasim.core.errors import DAEError
 from dnasim.solver import solve_dae
 
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from dnasim import solve_dae
-from dnasim.plantfile import loads
+from dnasim.plant.plantfile import loads
 from dnasim.solver.api import DAEError
 
 K = 2.0  # 1/s
@@ -82,7 +82,7 @@ def test_quadrature_mask_is_checked():
 def test_plant_accumulators_are_quadratures_and_their_atol_ignores_the_run_length():
     from pathlib import Path
 
-    from dnasim.start import initial_values
+    from dnasim.start.initial import initial_values
 
     field = Path(__file__).resolve().parent / "field" / "closed_form_water.toml"
     dae = loads(field.read_text()).plant.compile()

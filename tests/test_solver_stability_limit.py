@@ -12,7 +12,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from dnasim.plantfile import load
+from dnasim.plant.plantfile import load
 from dnasim.solver import bdf
 
 ROOT = Path(__file__).resolve().parent.parent

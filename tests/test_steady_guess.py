@@ -10,12 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dnasim.components import MassFlowBoundary, Pipe, PressureBoundary, Valve
-from dnasim.initial_guess import initial_guess
+from dnasim.library import MassFlowBoundary, Pipe, PressureBoundary, Valve
 from dnasim.media import get_medium
-from dnasim.plant import Plant
-from dnasim.plantfile import load
-from dnasim.start import initial_values
+from dnasim.plant.plant import Plant
+from dnasim.plant.plantfile import load
+from dnasim.start.guess import initial_guess
+from dnasim.start.initial import initial_values
 
 PLANTS = Path(__file__).resolve().parent.parent / "plants"
 CP = get_medium("Air").state(1e5, 3e5).cp

@@ -1,4 +1,4 @@
-"""The steady start (issue 20, ``dnasim.steady_state``): plants written as a user
+"""The steady start (issue 20, ``dnasim.start.steady_state``): plants written as a user
 writes them, each started at rest and checked against a long given-start run settled
 to rest (the time functions are constant before t0, so a run from t0 - T to t0 ends
 at the state at rest of t0) or against hand values with IF97 (CoolProp's IF97
@@ -21,10 +21,10 @@ import pytest
 from click.testing import CliRunner
 from CoolProp.CoolProp import PropsSI
 
-from dnasim.cli import main
-from dnasim.plantfile import load, loads
-from dnasim.simulation import simulate
-from dnasim.steady_state import SteadyStateError, find_steady_state
+from dnasim.cli.commands import main
+from dnasim.plant.plantfile import load, loads
+from dnasim.run.simulation import simulate
+from dnasim.start.steady_state import SteadyStateError, find_steady_state
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANTS = ROOT / "tests" / "plants"
@@ -117,7 +117,7 @@ def test_feed_line_given_start_feeds_and_settles_at_the_steady_start():
     # steady start (found by the pseudo-transient continuation).
     loaded = load(PLANTS / "steady_feed_line.toml")
     system = loaded.plant.compile()
-    from dnasim.start import initial_values
+    from dnasim.start.initial import initial_values
 
     y0, _ = initial_values(system, 0.0, "given")
     at = system.index
@@ -143,7 +143,7 @@ def test_valve_chain_without_volumes_starts():
     # stopped with a singular Jacobian (every node guessed at the line's 160 bar: the
     # check valve in its closed band). Now the given start (the same state as the
     # steady one: every variable is algebraic) is found.
-    from dnasim.start import initial_values
+    from dnasim.start.initial import initial_values
 
     system = compiled("valve_chain_check")
     y, _ = initial_values(system, 0.0, "given")
@@ -321,7 +321,7 @@ def test_node_guess_of_the_plant_file_is_the_start_of_the_search():
 
 
 def test_node_guess_from_python():
-    from dnasim.initial_guess import initial_guess
+    from dnasim.start.guess import initial_guess
 
     plant = load(PLANTS / "steady_prv_station.toml").plant
     plant.guess_node("n_lp", p="12 bar", h="3000 kJ/kg")

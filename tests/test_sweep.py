@@ -19,13 +19,13 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from dnasim import sweeps
-from dnasim.cases import CaseError, apply_case, parse_set_option, product_cases, read_cases
-from dnasim.cli import main
-from dnasim.output import read_results_csv
-from dnasim.plantfile import LoadedPlant, load
-from dnasim.runner import run_plant
-from dnasim.spec import build_plant
+from dnasim.cli.commands import main
+from dnasim.plant.cases import CaseError, apply_case, parse_set_option, product_cases, read_cases
+from dnasim.plant.plantfile import LoadedPlant, load
+from dnasim.plant.spec import build_plant
+from dnasim.run.output import read_results_csv
+from dnasim.run.runner import run_plant
+from dnasim.tools import sweeps
 
 PLANT = Path(__file__).parent / "plants" / "lag_sensor.toml"
 T0, T1, T_STEP = 373.15, 423.15, 10.0  # supply temperature before/after [K], step time [s]

@@ -1,4 +1,4 @@
-"""The laws of dnasim.components.tube_laws, one by one, against the correlations they
+"""The laws of dnasim.library.submodels.tube_laws, one by one, against the correlations they
 are made of (the formulas of their module doc written out here), and their smoothness
 through zero flow and the saturation line."""
 
@@ -9,8 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from dnasim.components.tube_geometry import TubeBank, Tubes
-from dnasim.components.tube_laws import (
+from dnasim.correlations import boiling, condensation, friction, metals, radiation, tube_banks
+from dnasim.library.submodels.tube_geometry import TubeBank, Tubes
+from dnasim.library.submodels.tube_laws import (
     DOME,
     LIQUID,
     BankConvection,
@@ -19,7 +20,6 @@ from dnasim.components.tube_laws import (
     TubeConvection,
     TubeFriction,
 )
-from dnasim.correlations import boiling, condensation, friction, metals, radiation, tube_banks
 from dnasim.media import get_medium
 
 WATER = get_medium("Water")
@@ -201,7 +201,7 @@ def test_bank_with_fins_and_gas_radiation():
 
 
 def test_bank_radiation_needs_a_gas_with_composition():
-    from dnasim.errors import PlantError
+    from dnasim.core.errors import PlantError
 
     t = Tubes(D=0.03, length=10.0, n_tubes=4, wall_thickness=0.004, metal=metals.metal("P235GH"))
     law = BankConvection(TubeBank(t, False, 0.08, 0.08, 4), n=2, radiation=True)

@@ -19,9 +19,9 @@ import math
 
 import pytest
 
-from dnasim.components import HeatExchanger, MassFlowBoundary, PressureBoundary, Valve
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.library import HeatExchanger, MassFlowBoundary, PressureBoundary, Valve
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 KA_HOT, KA_COLD = 2000.0, 20000.0  # W/K
 M_GAS, M_WATER = 1.0, 2.0  # kg/s

@@ -1,4 +1,4 @@
-"""dnasim.units: strings with units to SI, dimension checks."""
+"""dnasim.core.units: strings with units to SI, dimension checks."""
 
 import math
 import subprocess
@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from dnasim.units import UnitError, convert, dimension_name, parse_quantity, parse_unit, to_si
+from dnasim.core.units import UnitError, convert, dimension_name, parse_quantity, parse_unit, to_si
 
 
 @pytest.mark.parametrize(
@@ -130,7 +130,7 @@ def test_non_numbers_are_refused(value):
 
 
 def test_unit_error_is_a_value_error_and_a_dnasim_error():
-    from dnasim.errors import DnasimError
+    from dnasim.core.errors import DnasimError
 
     with pytest.raises(ValueError):
         to_si("1 K", "Pa")
@@ -176,9 +176,9 @@ def test_dimension_names():
 
 
 def test_import_is_light():
-    """dnasim.units must not pull pint, matplotlib or CoolProp (start-up time of the CLI)."""
+    """dnasim.core.units must not pull pint, matplotlib or CoolProp (start-up time of the CLI)."""
     code = (
-        "import sys, dnasim.units; "
+        "import sys, dnasim.core.units; "
         "bad = [m for m in ('pint', 'matplotlib', 'CoolProp') if m in sys.modules]; "
         "print(','.join(bad))"
     )

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from dnasim.errors import PlantError, Problems
-from dnasim.plantfile import loads
-from dnasim.units import STANDARD_ATMOSPHERE, UnitError, convert, convert_quantity, to_si
+from dnasim.core.errors import PlantError, Problems
+from dnasim.core.units import STANDARD_ATMOSPHERE, UnitError, convert, convert_quantity, to_si
+from dnasim.plant.plantfile import loads
 
 ROOT = Path(__file__).resolve().parents[1]
 PRESSURE_LOOP = (ROOT / "tests" / "plants" / "pressure_loop.toml").read_text()
@@ -87,8 +87,8 @@ def test_sine_amplitude_in_barg_is_a_difference():
 
 
 def test_delta_pa_parameter_of_a_component_refuses_barg():
-    from dnasim.components import REGISTRY
-    from dnasim.values import param_value
+    from dnasim.core.values import param_value
+    from dnasim.library import REGISTRY
 
     valve = REGISTRY["Valve"]
     p = next(p for p in valve.PARAMS if p.name == "dp_reg")
@@ -172,8 +172,8 @@ def test_an_invalid_atmosphere_is_named(value, words):
 
 
 def test_python_api_gauge_values():
-    from dnasim.components import REGISTRY
-    from dnasim.spec import ComponentSpec, PlantSpec
+    from dnasim.library import REGISTRY
+    from dnasim.plant.spec import ComponentSpec, PlantSpec
 
     boundary = REGISTRY["PressureBoundary"]
     assert boundary("b", p="5 barg", T="150 degC").param_at("p", 0) == 601325.0
@@ -194,7 +194,7 @@ def test_python_api_gauge_values():
 
 
 def test_sweep_cases_in_barg_use_the_plants_atmosphere():
-    from dnasim.cases import apply_case, check_cases
+    from dnasim.plant.cases import apply_case, check_cases
 
     spec = loads(_pressure_loop('atmosphere = "0.95 bar"'), "gauge.toml").spec
     check_cases(spec, [{"src.p": "18 barg"}])

@@ -1,4 +1,4 @@
-"""Every unit of ``dnasim.units`` against pint, the well-kept unit library (a test
+"""Every unit of ``dnasim.core.units`` against pint, the well-kept unit library (a test
 dependency only: dnasim keeps its own small table, see the module docstring).
 
 For each name of the table: the SI factor (the size of one unit in SI), the offset
@@ -18,8 +18,8 @@ from __future__ import annotations
 import pint
 import pytest
 
-from dnasim import units
-from dnasim.units import STANDARD_ATMOSPHERE, convert, parse_unit, to_si
+from dnasim.core import units
+from dnasim.core.units import STANDARD_ATMOSPHERE, convert, parse_unit, to_si
 
 REL = 1e-12  # see the module docstring
 

@@ -14,10 +14,11 @@ import CoolProp.CoolProp as CP
 import numpy as np
 import pytest
 
-from dnasim.components import PressureBoundary, Valve
-from dnasim.components.control_valve import ControlValve, hem_omega
-from dnasim.components.drain_valve import DrainValve
-from dnasim.components.valve_laws import (
+from dnasim.core.errors import PlantError
+from dnasim.library import PressureBoundary, Valve
+from dnasim.library.control_valve import ControlValve, hem_omega
+from dnasim.library.drain_valve import DrainValve
+from dnasim.library.submodels.valve_laws import (
     DEW_BAND,
     critical_pressure_ratio,
     inlet_exponent,
@@ -27,11 +28,10 @@ from dnasim.components.valve_laws import (
     omega_subcooled_critical_ratio,
     omega_subcooled_factor,
 )
-from dnasim.errors import PlantError
 from dnasim.media import get_medium
 from dnasim.media.isentropic import heat_capacity_ratio, isentropic_exponent
-from dnasim.plant import Plant
-from dnasim.start import initial_values
+from dnasim.plant.plant import Plant
+from dnasim.start.initial import initial_values
 
 IF97 = "IF97::Water"
 WATER = get_medium("Water")

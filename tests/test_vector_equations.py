@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from dnasim.components import Component, Equation, Variable
-from dnasim.errors import PlantError
-from dnasim.plant import Plant
+from dnasim.core.errors import PlantError
+from dnasim.library import Component, Equation, Variable
+from dnasim.plant.plant import Plant
 from dnasim.solver import solve_dae
 
 

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from dnasim.cli import main
+from dnasim.cli.commands import main
 
 ROOT = Path(__file__).resolve().parents[1]
 LIMITS = ROOT / "tests" / "plants" / "limits"
@@ -162,8 +162,8 @@ def test_a_declared_range_stops_the_run_with_its_message():
     # the general guard: a variable declared with a range (Variable(min=...)), here a
     # state of a small test component driven below its minimum; the run stops at the
     # located crossing with a message naming component, variable, limit and time
-    from dnasim.components.base import Component, Equation, Variable
-    from dnasim.plant import Plant
+    from dnasim.model.component import Component, Equation, Variable
+    from dnasim.plant.plant import Plant
 
     class Tank(Component):
         """dM/dt = -2 kg/s from M(0) = 10 kg, M >= 0 (reaches 0 at t = 5 s)."""

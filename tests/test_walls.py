@@ -1,4 +1,4 @@
-"""Walls (dnasim.components.walls on Pipe): steady conduction through layers and
+"""Walls (dnasim.library.submodels.walls on Pipe): steady conduction through layers and
 an outer convection against the closed-form resistances, the exponential
 response of a lumped wall to an outer temperature step, a heat flux input, and
 the balances over a run."""
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from plant_checks import balances
 
-from dnasim.components import MassFlowBoundary, Pipe, PressureBoundary, Valve
-from dnasim.plant import Plant
-from dnasim.timefunctions import Ramp, Step
+from dnasim.core.timefunctions import Ramp, Step
+from dnasim.library import MassFlowBoundary, Pipe, PressureBoundary, Valve
+from dnasim.plant.plant import Plant
 
 R_IN, R_OUT, LENGTH, LAMBDA = 0.05, 0.08, 10.0, 15.0  # m, m, m, W/(m K)
 KA = 5000.0  # W/K fluid to the inner surface

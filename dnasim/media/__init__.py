@@ -20,7 +20,7 @@
     water.saturation_transport(p)                 # -> saturated mu_l, mu_v, k_l, ..., sigma
 
 Every failure to evaluate a state is a :class:`PropertyError` (a
-:class:`dnasim.errors.ResidualDomainError`) that names the fluid, p, h and the
+:class:`dnasim.core.errors.ResidualDomainError`) that names the fluid, p, h and the
 property. CoolProp is imported only when a CoolProp medium is requested, numba
 (for IF97 water) only when water is.
 Modules: ``state`` (FluidState, FluidStates), ``errors`` (PropertyError),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from dnasim.errors import ResidualDomainError
+from dnasim.core.errors import ResidualDomainError
 
 
 def _fmt_p(p: float) -> str:
@@ -30,7 +30,7 @@ class PropertyError(ResidualDomainError):
     zero, NaN or infinite input, a state outside a backend's range, a failed
     flash inside CoolProp (which raises ``ValueError``, ``IndexError`` or
     ``RuntimeError`` depending on the backend), a NaN output. It subclasses
-    :class:`dnasim.errors.ResidualDomainError`, so when raised inside a residual
+    :class:`dnasim.core.errors.ResidualDomainError`, so when raised inside a residual
     evaluation the solver treats it as a failed Newton iteration and cuts the
     step.
 

@@ -81,7 +81,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dnasim.errors import PlantError
+from dnasim.core.errors import PlantError
 from dnasim.media.base import Medium, _as_arrays, transport_result
 from dnasim.media.errors import PropertyError
 from dnasim.media.gas_transport import MixtureTransport
@@ -306,7 +306,7 @@ class GasMixture(Medium):
 
     Raises
     ------
-    dnasim.errors.PlantError
+    dnasim.core.errors.PlantError
         Unknown species, a negative fraction or one above 1, fractions not summing to 1,
         both or a wrong kind of composition.
     """
@@ -661,7 +661,7 @@ def gas_mixture_from_name(name: str) -> GasMixture:
 
     Raises
     ------
-    dnasim.errors.PlantError
+    dnasim.core.errors.PlantError
         For a malformed name or composition.
     """
     m = _NAME_RE.match(name)

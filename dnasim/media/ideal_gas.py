@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from dnasim.errors import PlantError
+from dnasim.core.errors import PlantError
 from dnasim.media.base import Medium, _as_arrays, transport_result
 from dnasim.media.errors import PropertyError
 from dnasim.media.gas_mixture import DRY_AIR, GasMixture
@@ -55,7 +55,7 @@ class IdealGas(Medium):
 
     Raises
     ------
-    dnasim.errors.PlantError
+    dnasim.core.errors.PlantError
         For a non-positive or non-finite parameter, or cp <= R.
     """
 
@@ -164,7 +164,7 @@ class IdealGas(Medium):
     def T_rho_u(self, p, h, branch=None, memo=None):
         """(T [K], rho [kg/m3], u [J/kg]) arrays at 1-D float arrays p [Pa], h [J/kg]: the
         numbers of :meth:`states` without its other fields, for a residual's property
-        call (``dnasim.components.physics.PropertyArrays``); ``branch`` and ``memo`` are
+        call (``dnasim.model.physics.PropertyArrays``); ``branch`` and ``memo`` are
         not used (no phase branches; nothing to remember for closed forms). Raises
         :class:`PropertyError` as :meth:`states` does."""
         T = self.T_ref + h / self.cp

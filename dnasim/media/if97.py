@@ -141,7 +141,7 @@ class IF97Water(Medium):
         """(T [K], rho [kg/m3], u [J/kg]) arrays at 1-D float arrays p [Pa], h [J/kg]
         with a :meth:`states_memo` (compiled kernel): the numbers of ``states(p, h,
         branch=branch, memo=memo)`` without its other fields, for a residual's call
-        (``dnasim.components.physics.PropertyArrays``). Raises :class:`PropertyError`
+        (``dnasim.model.physics.PropertyArrays``). Raises :class:`PropertyError`
         for the first state out of range, as ``states`` does."""
         T, rho, u, status = NB.ph_memo_T_rho_u(p, h, branch, memo)
         if status.any():
@@ -284,12 +284,12 @@ class IF97Water(Medium):
 
 def _load_compiled_kernels() -> None:
     """Compile (first use on a machine, ~10 s) or load from numba's cache the four
-    entry points, with SIGTERM/SIGINT held meanwhile (``dnasim.entry.held``): a signal
+    entry points, with SIGTERM/SIGINT held meanwhile (``dnasim.cli.entry.held``): a signal
     raised inside numba's compiler callbacks would be swallowed there (ctypes ignores
     exceptions in callbacks) and the run would go on."""
     if _load_compiled_kernels.done:
         return
-    from dnasim.interrupts import held
+    from dnasim.core.interrupts import held
     from dnasim.media.numba_loading import install
 
     install()  # cached kernels load without numba's compiler set-up (0.1 to 0.2 s CPU)

@@ -663,7 +663,7 @@ def ph_branch_scalar(p, h, branch):
     the homogeneous mixture formula continued to x < 0 and x > 1. Each branch is
     smooth in (p, h) and equals the true state on its own side of the saturation
     line, so a model that keeps a volume's branch between located crossings (a
-    discrete mode, ``dnasim.components.channel``) sees no kink within a step. Where
+    discrete mode, ``dnasim.library.submodels.channel``) sees no kink within a step. Where
     the forced branch has no solution the true state is returned.
     """
     return _ph_branch(p, h, branch, math.nan)[0]

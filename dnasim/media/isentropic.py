@@ -14,10 +14,10 @@ converged after ``MAX_NEWTON`` steps, scipy's brentq finishes on a bracket.
 
 The isentropic exponent and the ratio of specific heats of a state
 (``isentropic_exponent``, ``heat_capacity_ratio``) from its (p, h) derivatives are
-here too; the valve laws (``dnasim.components.valve_laws``) take the exponent of the
+here too; the valve laws (``dnasim.library.submodels.valve_laws``) take the exponent of the
 inlet state from them.
 
-Used by the steam turbine (``dnasim.components.turbine``) for the isentropic
+Used by the steam turbine (``dnasim.library.turbine``) for the isentropic
 outlet state h_s = h(p_out, s(p_in, h_in)); with IF97 water the result is checked
 against CoolProp's IF97 backend in ``tests/test_isentropic.py``.
 """

@@ -5,7 +5,7 @@ from __future__ import annotations
 import difflib
 import re
 
-from dnasim.errors import PlantError
+from dnasim.core.errors import PlantError
 from dnasim.media.base import BACKEND_ERRORS, Medium
 
 #: Backends accepted by :func:`get_medium` (case-insensitive).
@@ -64,7 +64,7 @@ def canonical_fluid_name(fluid: str) -> str:
 
     Raises
     ------
-    dnasim.errors.PlantError
+    dnasim.core.errors.PlantError
         For an unknown name, with close matches and the way to list all names.
     """
     key = _norm(fluid)
@@ -128,7 +128,7 @@ def get_medium(fluid: str, backend: str | None = None) -> Medium:
 
     Raises
     ------
-    dnasim.errors.PlantError
+    dnasim.core.errors.PlantError
         Unknown fluid name (with "did you mean" suggestions), unknown backend,
         conflicting backends, a backend that does not cover the fluid.
     """

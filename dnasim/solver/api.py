@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dnasim.blas_threads import one_blas_thread
-from dnasim.errors import DAEError, ResidualDomainError
+from dnasim.core.blas_threads import one_blas_thread
+from dnasim.core.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
 from dnasim.solver.bdf import CountedResidual, NordsieckBDF, SolverStats
 from dnasim.solver.callbacks import call_user
@@ -72,7 +72,7 @@ def _solve_dae(
     ----------
     residual : F(t, y, yp) -> array of shape (n,). dF/dy' may be singular; a
         differential equation may hold derivatives of other variables.
-        It may raise ``dnasim.errors.ResidualDomainError`` for a state outside
+        It may raise ``dnasim.core.errors.ResidualDomainError`` for a state outside
         its domain: the step is then cut, like a failed Newton iteration.
     t_span : (t0, t_end), t_end > t0.
     y0, yp0 : initial values; yp0 defaults to zeros.
@@ -835,6 +835,6 @@ __all__ = ["solve_dae", "nd"]
 
 @functools.wraps(_solve_dae)
 def solve_dae(residual, t_span, y0, yp0=None, **options):
-    # one BLAS thread while a large system is integrated (dnasim.blas_threads)
+    # one BLAS thread while a large system is integrated (dnasim.core.blas_threads)
     with one_blas_thread(int(np.size(y0))):
         return _solve_dae(residual, t_span, y0, yp0, **options)

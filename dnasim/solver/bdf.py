@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dnasim.errors import DAEError, ResidualDomainError
+from dnasim.core.errors import DAEError, ResidualDomainError
 from dnasim.solver import nordsieck as nd
 from dnasim.solver.callbacks import user_error
 from dnasim.solver.linear_algebra import IterationMatrix, SingularMatrixError

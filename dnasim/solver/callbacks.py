@@ -11,7 +11,7 @@ model's domain: the solver cuts the step), ``DAEError`` and
 
 from __future__ import annotations
 
-from dnasim.errors import DAEError, ResidualDomainError
+from dnasim.core.errors import DAEError, ResidualDomainError
 
 
 class UserCallbackError(DAEError):

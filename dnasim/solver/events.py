@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dnasim.errors import DAEError
+from dnasim.core.errors import DAEError
 from dnasim.solver.callbacks import call_user
 
 EPS = float(np.finfo(float).eps)

@@ -7,7 +7,7 @@ The driver stops exactly at every tstop and re-initialises there, stops at
 every switch crossing, runs the switch's action and re-initialises.
 Re-initialisation is the caller's ``reinitialise(t, y, yp) -> (y, yp)``
 (consistent y' and algebraic y with the differential y kept; for plants the
-damped Newton of ``dnasim.initialization``, as in ``dnasim.backends.IDA``):
+damped Newton of ``dnasim.start.consistent``, as in ``dnasim.run.backends.IDA``):
 IDACalcIC fails on the large jumps a step of a boundary value causes.
 
 ``linsolver``: "dense", "sparse" (SuperLU_MT on ``jac_sparsity``) or "band":

@@ -75,7 +75,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from dnasim.errors import DAEError, ResidualDomainError
+from dnasim.core.errors import DAEError, ResidualDomainError
 from dnasim.solver.linear_algebra import SQRT_EPS, IterationMatrix, SingularMatrixError
 
 EPS = float(np.finfo(float).eps)

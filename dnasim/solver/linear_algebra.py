@@ -39,7 +39,7 @@ import scipy.sparse
 import scipy.sparse.linalg
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
-from dnasim.errors import DAEError, ResidualDomainError
+from dnasim.core.errors import DAEError, ResidualDomainError
 from dnasim.solver.band import BandLU, BandOrdering
 from dnasim.solver.callbacks import call_user, user_error
 
@@ -95,7 +95,7 @@ def colour_columns(pattern: scipy.sparse.csc_matrix) -> list[np.ndarray]:
 
 def _columns_residual(residual) -> Callable | None:
     """``residual_for_columns`` of the object the residual is a method of (a compiled
-    plant: ``dnasim.system.System.residual``), directly or wrapped in the solver's
+    plant: ``dnasim.compilation.system.System.residual``), directly or wrapped in the solver's
     counting wrapper (``.residual``); None for any other function.
 
     ``residual_for_columns(cols)`` returns F_cols(t, y, yp, f0): F at a point that

@@ -1,0 +1,1360 @@
+"""TOML plant files: read, validate (before any numerics), build a ``Plant``.
+
+The schema is documented in ``docs/plant_files.md``. In short::
+
+    [plant]
+    name = "attemperator"
+
+    [simulation]
+    t_end = "20 min"
+    output_interval = "1 s"      # optional; default: every accepted step
+    rtol = 1e-6
+    atol_scaled = 1e-8
+    max_order = 4
+    start = "steady"             # or "given"
+
+    [components.steam]
+    type = "PressureBoundary"
+    p = "120 bar"
+    T = { type = "step", t0 = "60 s", before = "540 degC", after = "560 degC" }
+    ports = { outlet = "n1" }                 # fluid port -> node name
+
+    [components.pi]
+    type = "PIController"
+    inputs = { measurement = "sensor.T" }     # signal input <- "component.output"
+
+Every problem is reported as a :class:`~dnasim.core.errors.PlantError` whose message
+names the file, the table, the key and (when it can be found) the line, one
+paragraph per problem; all problems found are reported together.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from dnasim.core.errors import PlantError, Problems
+from dnasim.core.units import STANDARD_ATMOSPHERE, UnitError, parse_quantity, parse_unit
+from dnasim.core.values import (
+    LIMITS,
+    TIME_FUNCTION_TYPES,
+    example,
+    limit_message,
+    param_kind,
+    param_unit,
+    param_value,
+    per_signal,
+    quantity,
+    suggest,
+    type_name,
+)
+from dnasim.plant.spec import ComponentSpec, PlantSpec, SimulationSettings, build_plant
+
+__all__ = [
+    "load_plant",
+    "load",
+    "loads",
+    "LoadedPlant",
+    "SimulationSettings",
+    "ComponentSpec",
+    "PlantSpec",
+    "read_plant_file",
+    "parse_plant",
+    "build_plant",
+    "component_info",
+    "RESERVED_KEYS",
+    "TIME_FUNCTION_TYPES",
+]
+
+#: keys of a component table that are not parameters
+RESERVED_KEYS = ("type", "ports", "inputs", "description")
+
+
+SIMULATION_KEYS = {
+    "t_end": "end time of the simulation [s] (required)",
+    "t_start": "start time [s] (default 0)",
+    "output_interval": "time between rows of results.csv [s] (default: every accepted step)",
+    "rtol": "relative error tolerance (default 1e-6)",
+    "atol_scaled": "absolute error tolerance per unit of each variable's scale: "
+    "atol_i = atol_scaled * max(nominal_i, |y0_i|) (default 1e-6)",
+    "max_order": "maximum BDF order, 1..5 (default 4)",
+    "start": '"steady" (steady state at t_start) or "given" (initial states from parameters)',
+    "max_step": "largest step size [s] (default: unlimited)",
+    "max_steps": "most accepted steps before the run stops (default 500000)",
+}
+
+_TOP_LEVEL = ("plant", "simulation", "components", "nodes")
+#: the keys of a ``[nodes.<name>]`` table (guesses for the start) and their SI units
+NODE_GUESS_KEYS = {"p": "Pa", "T": "K", "h": "J/kg"}
+
+
+# --------------------------------------------------------------------------- data
+
+
+@dataclass
+class LoadedPlant:
+    """What ``dnasim run`` works with: the plant, its settings and where it came from."""
+
+    plant: Any
+    simulation: SimulationSettings
+    spec: PlantSpec
+    path: str
+
+    def simulate(self, **overrides):
+        """Run ``plant.simulate`` with the file's settings (keywords override them)."""
+        return simulate_plant(self.plant, self.simulation, **overrides)
+
+
+# --------------------------------------------------------------------------- errors
+
+
+class _LineIndex:
+    """Best-effort map (table path, key) -> line number, by scanning the TOML text."""
+
+    _HEADER = re.compile(r"^\s*\[\[?\s*(.+?)\s*\]\]?\s*(#.*)?$")
+    _KEY = re.compile(
+        r"^\s*((?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*'))*)\s*="
+    )
+    _INLINE_KEY = re.compile(r"[{,]\s*([A-Za-z0-9_-]+|\"[^\"]*\")\s*=")
+
+    def __init__(self, text: str):
+        self.map: dict[tuple[str, ...], int] = {}
+        table: tuple[str, ...] = ()
+        in_multiline = None
+        for lineno, line in enumerate(text.splitlines(), start=1):
+            if in_multiline:
+                if in_multiline in line:
+                    in_multiline = None
+                continue
+            m = self._HEADER.match(line)
+            if m and not self._KEY.match(line):
+                table = self._split(m.group(1))
+                self.map.setdefault(table, lineno)
+                continue
+            m = self._KEY.match(line)
+            if m:
+                path = table + self._split(m.group(1))
+                self.map.setdefault(path, lineno)
+                rest = line[m.end() :]
+                for q in ('"""', "'''"):
+                    if rest.count(q) == 1:
+                        in_multiline = q
+                if "{" in rest:
+                    for km in self._INLINE_KEY.finditer(rest):
+                        self.map.setdefault(path + (km.group(1).strip("\"'"),), lineno)
+
+    @staticmethod
+    def _split(dotted: str) -> tuple[str, ...]:
+        parts = re.findall(r"\"[^\"]*\"|'[^']*'|[^.\s]+", dotted)
+        return tuple(p.strip("\"'") for p in parts)
+
+    def find(self, table: Sequence[str], key: str | None) -> int | None:
+        path = tuple(table) + ((key,) if key is not None else ())
+        while path:
+            if path in self.map:
+                return self.map[path]
+            path = path[:-1]
+        return None
+
+
+# --------------------------------------------------------------------------- component metadata
+
+
+def _registry() -> dict[str, type]:
+    from dnasim.plant.plugins import registry
+
+    return registry()
+
+
+def _names(obj) -> list[str]:
+    """Port names from a list/tuple/dict of names or port objects."""
+    if obj is None:
+        return []
+    if isinstance(obj, Mapping):
+        return [str(k) for k in obj]
+    out = []
+    for p in obj:
+        out.append(p if isinstance(p, str) else str(getattr(p, "name", p)))
+    return out
+
+
+def _first_attr(cls, names):
+    for n in names:
+        v = getattr(cls, n, None)
+        if v is not None and not callable(v) or isinstance(v, list | tuple | dict):
+            return v
+    return None
+
+
+def fluid_ports(cls) -> list[str]:
+    return _names(_first_attr(cls, ("FLUID_PORTS", "PORTS", "fluid_ports", "ports")))
+
+
+def signal_inputs(cls) -> list[str]:
+    return _names(
+        _first_attr(cls, ("SIGNAL_INPUTS", "INPUTS", "signal_inputs", "inputs", "SIGNALS_IN"))
+    )
+
+
+def signal_outputs(cls) -> list[str]:
+    return _names(
+        _first_attr(cls, ("SIGNAL_OUTPUTS", "OUTPUTS", "signal_outputs", "outputs", "SIGNALS_OUT"))
+    )
+
+
+def params_of(cls) -> list:
+    return list(getattr(cls, "PARAMS", ()) or ())
+
+
+def _is_required(p) -> bool:
+    d = getattr(p, "default", None)
+    try:
+        from dnasim.library import REQUIRED
+    except ImportError:
+        REQUIRED = None  # noqa: N806
+    if REQUIRED is not None and d is REQUIRED:
+        return True
+    return type(d).__name__.upper().startswith("REQUIRED") or repr(d).upper() == "REQUIRED"
+
+
+def _port_info(ports) -> list[dict]:
+    out = []
+    for p in ports or ():
+        if isinstance(p, str):
+            out.append({"name": p, "role": "", "unit": "", "doc": ""})
+        else:
+            out.append(
+                {
+                    "name": str(getattr(p, "name", p)),
+                    "role": str(getattr(p, "role", "") or ""),
+                    "unit": str(getattr(p, "unit", "") or ""),
+                    "doc": str(getattr(p, "doc", "") or ""),
+                }
+            )
+    return out
+
+
+def _declared_equations(cls, params) -> list[str]:
+    """The equations a component declares (``Component.equations()`` of an example
+    instance: required numbers set to 1), one line each, "name[i]" for a vector
+    equation: "name [unit]: doc". Empty when no example can be built."""
+    required = {p["name"]: 1.0 for p in params if p["required"] and p["kind"] == "number"}
+    try:
+        eqs = cls("example", **required).equations()
+    except Exception:
+        return []
+    out = []
+    for e in eqs:
+        name = e.name if getattr(e, "size", None) is None else f"{e.name}[i]"
+        unit = f" [{e.unit}]" if e.unit else ""
+        out.append(f"{name}{unit}: {e.doc}".rstrip(": ") if e.doc else f"{name}{unit}")
+    return out
+
+
+def component_info(cls) -> dict:
+    """Ports, parameters (unit, default, range, doc) and equations of a component class.
+
+    The equations are those its docstring lists (the component library documents
+    them there); ``EQUATIONS`` on the class, if present, is used as well."""
+    params = []
+    for p in params_of(cls):
+        params.append(
+            {
+                "name": p.name,
+                "unit": param_unit(p),
+                "required": _is_required(p),
+                "default": None if _is_required(p) else getattr(p, "default", None),
+                "min": getattr(p, "min", None),
+                "max": getattr(p, "max", None),
+                "doc": getattr(p, "doc", "") or "",
+                "time_function": bool(getattr(p, "time_function", False)),
+                "kind": param_kind(p),
+                "choices": getattr(p, "choices", None),
+            }
+        )
+    eqs = getattr(cls, "EQUATIONS", None)
+    if eqs is None:
+        eqs = []
+    elif isinstance(eqs, str):
+        eqs = [e for e in eqs.strip().splitlines() if e.strip()]
+    if not eqs:
+        eqs = _declared_equations(cls, params)
+    fports, sins = fluid_ports(cls), signal_inputs(cls)
+    if not any(p["required"] for p in params):
+        # ports may depend on parameters (a Mixer's inlets): list the defaults' ports
+        try:
+            inst = cls("example")
+            fports, sins = _names(inst.fluid_ports()), _names(inst.signal_inputs())
+        except Exception:
+            pass
+    return {
+        "type": cls.__name__,
+        "doc": inspect.cleandoc(cls.__doc__ or ""),
+        "fluid_ports": fports,
+        "signal_inputs": sins,
+        "signal_outputs": signal_outputs(cls),
+        "fluid_port_info": _port_info(getattr(cls, "FLUID_PORTS", ())),
+        "signal_input_info": _port_info(getattr(cls, "SIGNAL_INPUTS", ())),
+        "signal_output_info": _port_info(getattr(cls, "SIGNAL_OUTPUTS", ())),
+        "params": params,
+        "equations": list(eqs),
+    }
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def read_plant_file(path: str | Path) -> tuple[dict, str]:
+    """Read and decode a TOML file; malformed TOML becomes a ``PlantError`` with its line."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise PlantError(f"{path}: no such plant file") from None
+    except IsADirectoryError:
+        raise PlantError(f"{path}: is a directory, not a plant file") from None
+    except OSError as exc:
+        raise PlantError(f"{path}: cannot read the plant file: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line, col = _byte_line_column(raw, exc.start)
+        raise PlantError(
+            f"{path}, line {line}, column {col}: not a UTF-8 text file (byte "
+            f"0x{raw[exc.start]:02x}: {exc.reason}); save the plant file as UTF-8"
+        ) from None
+    return _decode(text, str(path)), text
+
+
+def _byte_line_column(raw: bytes, pos: int) -> tuple[int, int]:
+    """Line and column (in characters, both from 1) of byte ``pos`` of ``raw``."""
+    start = raw.rfind(b"\n", 0, pos) + 1
+    return raw.count(b"\n", 0, pos) + 1, len(raw[start:pos].decode("utf-8", "replace")) + 1
+
+
+#: nesting of arrays and inline tables that a plant file never needs
+DEEP_NESTING = 50
+
+
+def _deep_line(text: str, limit: int = DEEP_NESTING) -> int | None:
+    """The line where arrays and inline tables first nest ``limit`` deep (strings
+    and comments skipped), or None."""
+    depth, line, i, n = 0, 1, 0, len(text)
+    while i < n:
+        ch = text[i]
+        if ch == "\n":
+            line += 1
+        elif ch == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        elif ch in "\"'":
+            q = text[i : i + 3] if text[i : i + 3] in ('"""', "'''") else ch
+            j = i + len(q)
+            while j < n and text[j : j + len(q)] != q:
+                if text[j] == "\\" and ch == '"':
+                    j += 1
+                elif text[j] == "\n":
+                    if len(q) == 1:
+                        break
+                    line += 1
+                j += 1
+            i = j + len(q)
+            continue
+        elif ch in "[{":
+            depth += 1
+            if depth >= limit:
+                return line
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+        i += 1
+    return None
+
+
+def _decode(text: str, path: str) -> dict:
+    try:
+        return tomllib.loads(text)
+    except RecursionError:
+        line = _deep_line(text)
+        where = f"{path}, line {line}" if line else path
+        raise PlantError(
+            f"{where}: malformed plant file: arrays or tables nested too deeply (a plant file "
+            "needs at most a few levels)"
+        ) from None
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
+        why = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg).strip()
+        where = f"{path}"
+        if m:
+            where += f", line {m.group(1)}, column {m.group(2)}"
+        elif "end of document" in msg:
+            where += f", line {text.count(chr(10)) + 1}"
+        if "Cannot declare" in why or "Cannot overwrite" in why:
+            why += " (a name is used twice: each component table and each key may appear once)"
+        raise PlantError(f"{where}: malformed TOML: {why}") from None
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def _as_text(v, errors: Problems, table, key) -> str | None:
+    if not isinstance(v, str):
+        errors.add(table, key, f"expected a string, got {type_name(v)} ({v!r})")
+        return None
+    return v
+
+
+def input_unit(cls, port) -> str:
+    """The unit a signal input expects; "*" for any unit."""
+    return str(getattr(port, "unit", "1") or "1")
+
+
+def _simulation(data, errors: Problems) -> SimulationSettings:
+    s = SimulationSettings()
+    table = ("simulation",)
+    sim = data.get("simulation")
+    if sim is None:
+        errors.add((), "simulation", "missing the [simulation] table (at least t_end = ...)")
+        return s
+    if not isinstance(sim, dict):
+        errors.add((), "simulation", f"expected a table, got {type_name(sim)}")
+        return s
+    for k in sim:
+        if k not in SIMULATION_KEYS:
+            errors.add(
+                table,
+                k,
+                "unknown key; [simulation] has "
+                + ", ".join(SIMULATION_KEYS)
+                + suggest(k, SIMULATION_KEYS),
+            )
+    if "t_end" not in sim:
+        errors.add(table, "t_end", 'missing: the end time of the simulation, e.g. t_end = "15 min"')
+    for k in ("t_end", "t_start", "output_interval", "max_step"):
+        if k in sim:
+            x = quantity(sim[k], "s", errors, table, k)
+            if x is not None:
+                if k == "t_start" and x < 0:
+                    errors.add(table, k, f"must not be negative (got {x:g} s)")
+                elif k != "t_start" and x <= 0:
+                    errors.add(table, k, f"must be positive (got {x:g} s)")
+                else:
+                    setattr(s, k, x)
+    if "t_end" in sim and "t_start" in sim and s.t_end <= s.t_start:
+        errors.add(table, "t_end", f"must be after t_start ({s.t_end:g} s <= {s.t_start:g} s)")
+    elif s.output_interval is not None:
+        try:
+            s.check_output_points()
+        except PlantError as exc:
+            errors.add(table, "output_interval", str(exc).removeprefix("[simulation] "))
+    if "max_steps" in sim:
+        x = sim["max_steps"]
+        limit = LIMITS["max_steps"]
+        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
+            errors.add(table, "max_steps", f"expected a positive integer, got {x!r}")
+        elif x > limit:
+            errors.add(table, "max_steps", limit_message("max_steps", x, limit))
+        else:
+            s.max_steps = x
+    for k, lo, hi in (("rtol", 0.0, 1.0), ("atol_scaled", 0.0, math.inf)):
+        if k in sim:
+            x = quantity(sim[k], "1", errors, table, k)
+            if x is not None:
+                if not lo < x < hi:
+                    errors.add(table, k, f"must be > 0{' and < 1' if hi == 1 else ''} (got {x:g})")
+                else:
+                    setattr(s, k, x)
+    if "max_order" in sim:
+        x = sim["max_order"]
+        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= 5:
+            errors.add(table, "max_order", f"expected an integer from 1 to 5, got {x!r}")
+        else:
+            s.max_order = x
+    if "start" in sim:
+        x = sim["start"]
+        if not isinstance(x, str) or x.lower() not in ("steady", "given"):
+            errors.add(table, "start", f'expected "steady" or "given", got {x!r}')
+        else:
+            s.start = x.lower()
+    return s
+
+
+_NAME_OK = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")
+
+#: called with the medium name before a medium with CoolProp property tables
+#: (BICUBIC&..., TTSE&...) is first built; the command line prints a notice
+TABULAR_NOTICE = None
+_NOTIFIED: set[str] = set()
+
+
+def _is_tabular(name: str) -> bool:
+    backend = name.split("::", 1)[0].upper() if "::" in name else ""
+    return backend.startswith(("BICUBIC", "TTSE"))
+
+
+def _check_medium(name: str, errors: Problems, table, key) -> None:
+    """An unknown fluid name is reported here, with its place in the file."""
+    try:
+        from dnasim.media import get_medium
+    except ImportError:  # pragma: no cover - media layer missing
+        return
+    if TABULAR_NOTICE is not None and _is_tabular(name) and name.upper() not in _NOTIFIED:
+        _NOTIFIED.add(name.upper())
+        TABULAR_NOTICE(name)
+    try:
+        get_medium(name)
+    except PlantError as exc:
+        errors.add(table, key, str(exc))
+    except Exception as exc:  # the media layer's own failure: still the user's input
+        errors.add(table, key, f"unknown fluid {name!r}: {exc}")
+
+
+def _signal_units(comps: dict, registry) -> dict[str, list[str | None]]:
+    """For each component, the units of the signal outputs linked into it (from the raw
+    tables, before validation); ``None`` for a link that does not lead to a known
+    signal output (reported later, by the network check)."""
+    out: dict[str, list[str | None]] = {}
+    for name, table in comps.items():
+        if not isinstance(table, dict) or not isinstance(table.get("inputs"), dict):
+            continue
+        for src in _measured_first(table["inputs"]):
+            unit = None
+            if isinstance(src, str) and src.count(".") == 1:
+                cname, oname = src.split(".")
+                other = comps.get(cname)
+                cls = None
+                if isinstance(other, dict) and isinstance(other.get("type"), str):
+                    cls = registry.get(other["type"])
+                for port in getattr(cls, "SIGNAL_OUTPUTS", ()) or ():
+                    if getattr(port, "name", None) == oname and getattr(port, "unit", None):
+                        try:
+                            parse_unit(port.unit)
+                        except UnitError:
+                            continue
+                        unit = port.unit
+            out.setdefault(name, []).append(unit)
+    return out
+
+
+def _measured_first(inputs: dict) -> list:
+    """The sources of a component's inputs, the one of ``measured`` first: parameters
+    in the unit of the signal (``Param.per_signal``) take the measured signal's."""
+    keys = sorted(inputs, key=lambda k: k != "measured")
+    return [inputs[k] for k in keys]
+
+
+def _spec_builder(comps: dict, registry, errors: Problems, atmosphere: float | None = None):
+    """``spec_of(name)``: the ComponentSpec of component ``name`` (None when invalid),
+    built once. A component whose parameters are in the unit of its measured signal
+    (a controller's Kp, set point) needs that unit first: a signal output's unit
+    comes from the class; a variable's ("drum.level"), or a block output's that
+    follows its input ("*"), from the source built first (``dnasim.plant.signals``); a
+    node quantity's ("n_hdr.p") is fixed."""
+    from dnasim.plant.signals import NODE_QUANTITIES, resolve, split_ref
+
+    base_units = _signal_units(comps, registry)
+    nodes = {
+        n
+        for t in comps.values()
+        if isinstance(t, dict) and isinstance(t.get("ports"), dict)
+        for n in t["ports"].values()
+        if isinstance(n, str)
+    }
+    built: dict[str, ComponentSpec | None] = {}
+    building: set[str] = set()
+
+    def ref_unit(ref, seen=()):
+        parts = split_ref(ref)
+        if parts is None:
+            return None
+        c, v = parts
+        if c not in comps:
+            return NODE_QUANTITIES[v][0] if c in nodes and v in NODE_QUANTITIES else None
+        if c in seen:
+            return None
+        other = spec_of(c)
+        if other is None or other.instance is None:
+            return None
+        found = resolve(c, v, other.instance)
+        if isinstance(found, str) or found is None:
+            return None
+        unit = found.unit
+        if unit == "*":  # follows the block's inputs (Component.signal_output_unit)
+            table = comps.get(c)
+            inputs = table.get("inputs") if isinstance(table, dict) else None
+            if not isinstance(inputs, dict) or not inputs:
+                return None
+            units = {k: ref_unit(r, (*seen, c)) or "*" for k, r in inputs.items()}
+            unit = other.instance.signal_output_unit(found.variable, units)
+            if unit == "*":
+                return None
+        try:
+            parse_unit(unit)
+        except UnitError:
+            return None
+        return unit
+
+    def spec_of(cname):
+        if cname in built:
+            return built[cname]
+        if cname in building:
+            return None  # a loop of signals: its units stay unknown
+        building.add(cname)
+        table = comps[cname]
+        units = list(base_units.get(cname, ()))
+        tname = table.get("type") if isinstance(table, dict) else None
+        cls = registry.get(tname) if isinstance(tname, str) else None
+        needs = any(per_signal(cls, p) for p in params_of(cls)) if cls is not None else False
+        if needs and None in units and isinstance(table.get("inputs"), dict):
+            refs = _measured_first(table["inputs"])
+            units = [
+                u if u is not None else ref_unit(r, (cname,))
+                for u, r in zip(units, refs, strict=False)
+            ]
+        built[cname] = _component(cname, table, registry, errors, tuple(units), atmosphere)
+        building.discard(cname)
+        return built[cname]
+
+    return spec_of
+
+
+def _component(
+    name, table_data, registry, errors: Problems, signal_units=(), atmosphere=None
+) -> ComponentSpec | None:
+    table = ("components", name)
+    if not _NAME_OK.match(name):
+        errors.add(
+            table,
+            None,
+            f"invalid component name {name!r}: use letters, digits, '_' and '-', "
+            "starting with a letter (a '.' would clash with 'component.port')",
+        )
+        return None
+    if not isinstance(table_data, dict):
+        errors.add(
+            ("components",),
+            name,
+            f"expected a table [components.{name}], got {type_name(table_data)}",
+        )
+        return None
+    if "type" not in table_data:
+        errors.add(
+            table,
+            "type",
+            'missing: every component needs type = "..."; known types: '
+            + ", ".join(sorted(registry)),
+        )
+        return None
+    tname = table_data["type"]
+    if not isinstance(tname, str):
+        errors.add(table, "type", f"expected the name of a component type, got {type_name(tname)}")
+        return None
+    cls = registry.get(tname)
+    if cls is None:
+        errors.add(
+            table,
+            "type",
+            f"unknown component type {tname!r}{suggest(tname, registry)} "
+            f"(known: {', '.join(sorted(registry))}; see `dnasim components`)",
+        )
+        return None
+    spec = ComponentSpec(name=name, type=tname, cls=cls)
+    desc = table_data.get("description", "")
+    if not isinstance(desc, str):
+        errors.add(table, "description", f"expected a string, got {type_name(desc)}")
+    else:
+        spec.description = desc
+    params = {p.name: p for p in params_of(cls)}
+    fports = fluid_ports(cls)
+    sin = signal_inputs(cls)
+    sout = signal_outputs(cls)
+    n0 = len(errors.items)
+    unchecked = False
+    unchecked_keys: list[str] = []
+    for key, value in table_data.items():
+        if key in RESERVED_KEYS:
+            continue
+        p = params.get(key)
+        if p is None:
+            hint = suggest(key, list(params) + list(RESERVED_KEYS))
+            if key in fports:
+                hint = f"; '{key}' is a fluid port: write ports = {{ {key} = \"node\" }}"
+            elif key in sin:
+                hint = (
+                    f"; '{key}' is a signal input: "
+                    f'write inputs = {{ {key} = "component.output" }}'
+                )
+            errors.add(
+                table,
+                key,
+                f"unknown parameter of {tname}{hint} (parameters: {', '.join(params) or 'none'})",
+            )
+            continue
+        if per_signal(cls, p) and (not signal_units or None in signal_units):
+            # in the unit of a signal that is not (properly) linked: the broken link is
+            # reported by the network check; unit errors here would only follow from it
+            unchecked = True
+            unchecked_keys.append(key)
+            continue
+        spec.params[key] = param_value(
+            value, p, errors, table, key, signal_units, cls, atmosphere=atmosphere
+        )
+        if key == "medium" and isinstance(spec.params[key], str):
+            _check_medium(spec.params[key], errors, table, key)
+    for pname, p in params.items():
+        if pname not in table_data and _is_required(p):
+            unit = param_unit(p)
+            doc = getattr(p, "doc", "")
+            errors.add(
+                table,
+                pname,
+                f"missing required parameter of {tname}"
+                + (f" ({doc})" if doc else "")
+                + (f', e.g. {pname} = "{example(unit)}"' if param_kind(p) == "number" else ""),
+            )
+    if len(errors.items) == n0 and not unchecked:
+        # the parameters are valid: build the component now (cheap, no numerics) so
+        # that its own checks run and ports that depend on parameters are known
+        try:
+            spec.instance = cls(name, **spec.params)
+        except PlantError as exc:
+            msg = _strip_component_prefix(str(exc), name)
+            errors.add(table, _key_named(msg, table_data), msg)
+        except (TypeError, ValueError, KeyError, ArithmeticError) as exc:
+            msg = f"{tname} refused its parameters: {exc}"
+            errors.add(table, _key_named(str(exc), table_data), msg)
+        else:
+            inst = spec.instance
+            fports = _names(inst.fluid_ports()) if hasattr(inst, "fluid_ports") else fports
+            sin = _names(inst.signal_inputs()) if hasattr(inst, "signal_inputs") else sin
+            sout = _names(inst.signal_outputs()) if hasattr(inst, "signal_outputs") else sout
+    ports_known = spec.instance is not None
+    if len(errors.items) == n0 and unchecked:
+        # parameters in the unit of an unlinked signal: a probe with placeholder values
+        # (1 in any unit) tells which ports the component has; it is not kept
+        try:
+            probe = cls(name, **{**spec.params, **dict.fromkeys(unchecked_keys, 1.0)})
+        except Exception:  # the placeholders do not fit: the class's ports are used
+            probe = None
+        if probe is not None:
+            ports_known = True
+            fports = _names(probe.fluid_ports()) if hasattr(probe, "fluid_ports") else fports
+            sin = _names(probe.signal_inputs()) if hasattr(probe, "signal_inputs") else sin
+    spec.fluid_ports, spec.signal_inputs, spec.signal_outputs = fports, sin, sout
+    # fluid ports
+    ports = table_data.get("ports", {})
+    if not isinstance(ports, dict):
+        errors.add(
+            table,
+            "ports",
+            f"expected a table like ports = {{ {_port_example(fports)} }}, got {type_name(ports)}",
+        )
+        ports = {}
+    for port, node in ports.items():
+        sub = table + ("ports",)
+        if port not in fports:
+            if port in sin or port in sout:
+                errors.add(
+                    sub,
+                    port,
+                    f"'{port}' is a signal port of {tname}, not a fluid port: a signal cannot be "
+                    f'wired to a node; write inputs = {{ {port} = "component.output" }}'
+                    if port in sin
+                    else f"'{port}' is a signal output of {tname}, not a fluid port; link it from "
+                    "the receiving component's inputs",
+                )
+            else:
+                errors.add(
+                    sub,
+                    port,
+                    f"{tname} has no fluid port '{port}'{suggest(port, fports)} "
+                    f"(fluid ports: {', '.join(fports) or 'none'})",
+                )
+            continue
+        if not isinstance(node, str) or not node:
+            errors.add(sub, port, f"expected a node name (a string), got {type_name(node)}")
+            continue
+        if not _NAME_OK.match(node):
+            errors.add(sub, port, f"invalid node name {node!r}: use letters, digits, '_' and '-'")
+            continue
+        spec.ports[port] = node
+    # Without a built instance (its parameters are in error) the ports that depend on
+    # parameters are unknown: an "unconnected port" would follow from that error only
+    # (a controller's set_point and track inputs, a mixer's inlets).
+    built = ports_known
+    for port in fports if built else ():
+        if port not in ports:
+            errors.add(
+                table,
+                "ports",
+                f"unconnected port: the fluid port '{port}' of {tname} is not connected; "
+                f'add {port} = "<node>" to ports',
+            )
+    # signal inputs
+    inputs = table_data.get("inputs", {})
+    if not isinstance(inputs, dict):
+        errors.add(
+            table,
+            "inputs",
+            f'expected a table like inputs = {{ {sin[0] if sin else "u"} = "sensor.T" }}, '
+            f"got {type_name(inputs)}",
+        )
+        inputs = {}
+    for inp, src in inputs.items():
+        sub = table + ("inputs",)
+        if inp not in sin:
+            if inp in fports:
+                errors.add(
+                    sub,
+                    inp,
+                    f"'{inp}' is a fluid port of {tname}: a signal cannot be wired to a fluid "
+                    "port; "
+                    f'fluid ports are connected to nodes in ports = {{ {inp} = "node" }}',
+                )
+            elif _port(getattr(cls, "SIGNAL_INPUTS", ()), inp) is not None:
+                # the class has this input, this instance not: a parameter replaces it
+                doc = getattr(_port(cls.SIGNAL_INPUTS, inp), "doc", "") or ""
+                given = [q for q in re.findall(r"'([A-Za-z_]\w*)'", doc) if q in table_data]
+                if given:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"both the parameter '{given[0]}' and the signal input '{inp}' are "
+                        f"given; {tname} takes one of them: a fixed {given[0]} = ..., or "
+                        f'inputs = {{ {inp} = "component.output" }} to drive it',
+                    )
+                else:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"{tname} has the signal input '{inp}' only with other parameters"
+                        + (f" ({doc})" if doc else ""),
+                    )
+            else:
+                errors.add(
+                    sub,
+                    inp,
+                    f"{tname} has no signal input '{inp}'{suggest(inp, sin)} "
+                    f"(signal inputs: {', '.join(sin) or 'none'})",
+                )
+            continue
+        if not isinstance(src, str) or src.count(".") != 1:
+            errors.add(
+                sub,
+                inp,
+                f'expected "component.output" (e.g. "sensor.T"), got {src!r}',
+            )
+            continue
+        spec.inputs[inp] = src
+    for inp in sin if built else ():
+        if inp not in inputs and None not in signal_units:  # else the broken link says it
+            errors.add(
+                table,
+                "inputs",
+                f"unconnected port: the signal input '{inp}' of {tname} is not linked; "
+                f'add {inp} = "<component>.<output>" to inputs',
+            )
+    return spec
+
+
+def _network(specs: list[ComponentSpec], errors: Problems, broken: dict | None = None) -> None:
+    """Nodes with one port, signals from unknown components or outputs, signal
+    dimensions. ``broken``: raw tables of components already reported as invalid;
+    what follows only from their absence (their nodes, their outputs) is not
+    reported again."""
+    broken = broken or {}
+    broken_nodes = set()
+    for table in broken.values():
+        ports = table.get("ports") if isinstance(table, dict) else None
+        if isinstance(ports, dict):
+            broken_nodes.update(n for n in ports.values() if isinstance(n, str))
+    by_name = {c.name: c for c in specs}
+    node_members: dict[str, list[tuple[str, str]]] = {}
+    for c in specs:
+        for port, node in c.ports.items():
+            node_members.setdefault(node, []).append((c.name, port))
+    for node, members in node_members.items():
+        if node in by_name:
+            c, port = members[0]
+            errors.add(
+                ("components", c, "ports"),
+                port,
+                f"name used twice: '{node}' is both a component and a node; "
+                "give the node another name",
+            )
+        if len(members) == 1 and node not in broken_nodes:
+            c, port = members[0]
+            errors.add(
+                ("components", c, "ports"),
+                port,
+                f"unconnected port: node '{node}' has only {c}.{port}; every node joins at least "
+                "two ports (end a line with a boundary component)",
+            )
+    for c in specs:
+        for inp, src in c.inputs.items():
+            sub = ("components", c.name, "inputs")
+            comp, out = src.split(".")
+            other = by_name.get(comp)
+            if other is None and comp in node_members:
+                found = _signal_source(comp, out, None, True)
+                if isinstance(found, str):
+                    errors.add(sub, inp, found)
+                    continue
+                msg = _link_dimension_problem(c, inp, comp, out, found.unit)
+                if msg:
+                    errors.add(sub, inp, msg)
+                continue
+            if other is None:
+                if comp not in broken and comp not in broken_nodes:
+                    errors.add(
+                        sub,
+                        inp,
+                        f"no component named '{comp}' (and no node) for the signal source "
+                        f"'{src}', which must be a component's output or variable, or a "
+                        "node's p, h or T"
+                        f"{suggest(comp, list(by_name) + list(node_members))}",
+                    )
+                continue
+            outs = other.signal_outputs
+            if out in outs:
+                msg = _link_dimension_problem(c, inp, other, out)
+                if msg:
+                    errors.add(sub, inp, msg)
+                continue
+            if other.instance is not None:
+                found = _signal_source(comp, out, other.instance, False)
+                if not isinstance(found, str):
+                    msg = _link_dimension_problem(c, inp, comp, out, found.unit)
+                    if msg:
+                        errors.add(sub, inp, msg)
+                    continue
+                if out in other.fluid_ports:
+                    found = (
+                        f"'{src}' is a fluid port of {other.type}: a signal is a signal output, "
+                        f"a variable, or a node's p, h or T (write the node's name, e.g. "
+                        f"'<node>.p'); {found}"
+                    )
+                errors.add(sub, inp, found)
+                continue
+            if out in other.fluid_ports:
+                errors.add(
+                    sub,
+                    inp,
+                    f"'{src}' is a fluid port of {other.type}: a signal input must be linked "
+                    f"to a signal output, a variable or a node's p, h or T (outputs of {comp}: "
+                    f"{', '.join(outs) or 'none'})",
+                )
+            # otherwise: the source component's own parameters are in error (reported
+            # with it); whether it has this variable cannot be told without it
+
+
+def _signal_source(owner, ref, instance, is_node):
+    from dnasim.plant.signals import resolve
+
+    return resolve(owner, ref, instance, is_node)
+
+
+def _port(ports, name):
+    return next((q for q in ports or () if getattr(q, "name", None) == name), None)
+
+
+def _link_dimension_problem(dest: ComponentSpec, inp: str, src, out: str, have: str | None = None):
+    """Why the signal ``src.out`` cannot drive ``dest.inp`` (units of another dimension),
+    or None. ``src`` is a ComponentSpec, or a node name with ``have`` its unit.
+    Inputs with unit "*" take any signal."""
+    from dnasim.plant.signals import dimension_problem
+
+    q_in = _instance_port(dest, "signal_inputs", "SIGNAL_INPUTS", inp)
+    if q_in is None:
+        return None
+    src_name = src if isinstance(src, str) else src.name
+    if have is None:
+        q_out = _instance_port(src, "signal_outputs", "SIGNAL_OUTPUTS", out)
+        if q_out is None:
+            return None
+        have = str(getattr(q_out, "unit", "1") or "1")
+    return dimension_problem(
+        f"{src_name}.{out}",
+        have,
+        inp,
+        f"{dest.type} '{dest.name}'",
+        input_unit(dest.cls, q_in),
+        getattr(q_in, "doc", "") or "",
+    )
+
+
+def _instance_port(spec: ComponentSpec, method: str, attr: str, name: str):
+    """The port ``name``: from the built instance when there is one (ports and their
+    units may depend on parameters), else from the class."""
+    inst = spec.instance
+    if inst is not None and hasattr(inst, method):
+        try:
+            return _port(getattr(inst, method)(), name)
+        except Exception:  # a plugin's port method failing: fall back to the class
+            pass
+    return _port(getattr(spec.cls, attr, ()), name)
+
+
+def _plugin_imports(v, path, errors, allow_import: bool = False) -> list[str]:
+    """``[plant] import = ["my_components"]``: import the component modules now
+    (before the component types are looked up), next to the plant file first.
+
+    Only with ``allow_import`` (``--allow-import``, ``load(path, allow_import=True)``):
+    importing a module runs its code, and a plant file is data. Without it the
+    modules are named in one problem (how to allow them), and nothing is imported."""
+    from dnasim.plant.plugins import import_component_modules, module_origin
+
+    names = [v] if isinstance(v, str) else v
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        errors.add(("plant",), "import", f"expected a list of module names, got {v!r}")
+        return []
+    p = Path(str(path))
+    base = p.parent if p.suffix and p.parent.is_dir() else None
+    if not allow_import:
+        if names:
+            found = ", ".join(f"'{n}' ({module_origin(n, base)})" for n in names)
+            errors.add(
+                ("plant",),
+                "import",
+                f"the plant file asks to import the Python module{'s' if len(names) > 1 else ''} "
+                f"{found}; not imported: importing a module runs its code, and a plant file "
+                "is data that runs no code by itself. If you trust the module, allow it with "
+                "--allow-import (dnasim check/run/sweep --allow-import PLANT.toml; in Python "
+                "dnasim.plant.plantfile.load(path, allow_import=True)), or install it as a plugin "
+                "(entry point group 'dnasim.components'); otherwise remove the key",
+            )
+        return []
+    try:
+        return import_component_modules(names, base)
+    except PlantError as exc:
+        errors.add(("plant",), "import", str(exc).removeprefix("import: "))
+        return []
+
+
+#: the range of a site's atmospheric pressure [Pa] that ``[plant] atmosphere`` accepts:
+#: 0.2 bar (above the highest mountains) to 1.2 bar (below the deepest mines)
+ATMOSPHERE_RANGE = (2e4, 1.2e5)
+
+
+def _atmosphere(v, errors: Problems) -> float:
+    """``[plant] atmosphere = "0.95 bar"``: the site's ambient pressure [Pa], the zero
+    of the gauge units ("5 barg", "70 psig"); the standard atmosphere when invalid."""
+    x = quantity(v, "Pa", errors, ("plant",), "atmosphere")
+    if x is None:
+        return STANDARD_ATMOSPHERE
+    if isinstance(v, str) and parse_quantity(v)[1].gauge:
+        errors.add(
+            ("plant",),
+            "atmosphere",
+            f"the atmosphere is an absolute pressure, the zero of the gauge units; write it in "
+            f'an absolute unit, e.g. atmosphere = "1.013 bar", not {v!r}',
+        )
+        return STANDARD_ATMOSPHERE
+    lo, hi = ATMOSPHERE_RANGE
+    if not lo <= x <= hi:
+        errors.add(
+            ("plant",),
+            "atmosphere",
+            f"the atmosphere is the site's absolute ambient pressure, between {lo / 1e5:g} and "
+            f"{hi / 1e5:g} bar (got {x:g} Pa); write it with a unit, e.g. "
+            f'atmosphere = "1.013 bar" or "14.7 psi"',
+        )
+        return STANDARD_ATMOSPHERE
+    return x
+
+
+def parse_plant(
+    data: dict, path: str = "<plant>", text: str | None = None, *, allow_import: bool = False
+) -> PlantSpec:
+    """Validate decoded TOML; every problem becomes part of one ``PlantError``.
+
+    ``allow_import``: import the modules of ``[plant] import`` (they run code);
+    without it such a key is refused, alone, before anything else is read."""
+    errors = Problems(str(path), _LineIndex(text) if text is not None else None)
+    if not isinstance(data, dict):
+        errors.add((), None, "a plant file is a TOML document of tables")
+        errors.raise_if_any()
+    for k in data:
+        if k not in _TOP_LEVEL:
+            errors.add(
+                (),
+                k,
+                f"unknown top-level key or table; expected [plant], [simulation], "
+                f"[components.<name>] and [nodes.<name>]{suggest(k, _TOP_LEVEL)}",
+            )
+    name = Path(str(path)).stem
+    description = ""
+    medium = None
+    imports: list[str] = []
+    atmosphere = STANDARD_ATMOSPHERE
+    meta = data.get("plant", {})
+    if not isinstance(meta, dict):
+        errors.add((), "plant", f"expected a table [plant], got {type_name(meta)}")
+        meta = {}
+    for k, v in meta.items():
+        if k == "name":
+            name = _as_text(v, errors, ("plant",), k) or name
+        elif k == "description":
+            description = _as_text(v, errors, ("plant",), k) or ""
+        elif k == "medium":
+            medium = _as_text(v, errors, ("plant",), k)
+            if medium is not None:
+                _check_medium(medium, errors, ("plant",), k)
+        elif k == "import":
+            imports = _plugin_imports(v, path, errors, allow_import)
+            if not allow_import:
+                errors.raise_if_any()  # one paragraph: nothing of the file is used
+        elif k == "atmosphere":
+            atmosphere = _atmosphere(v, errors)
+        else:
+            errors.add(
+                ("plant",),
+                k,
+                "unknown key; [plant] has name, description, medium, atmosphere and import"
+                + suggest(k, ("name", "description", "medium", "atmosphere", "import")),
+            )
+    sim = _simulation(data, errors)
+    comps = data.get("components")
+    specs: list[ComponentSpec] = []
+    if comps is None:
+        errors.add(
+            (), "components", 'no components: add tables [components.<name>] with type = "..."'
+        )
+    elif not isinstance(comps, dict):
+        errors.add((), "components", f"expected tables [components.<name>], got {type_name(comps)}")
+    else:
+        if not comps:
+            errors.add(
+                (), "components", 'no components: add tables [components.<name>] with type = "..."'
+            )
+        registry = _registry()
+        if len(comps) > LIMITS["components"]:
+            errors.add(
+                (),
+                "components",
+                limit_message("the number of components", len(comps), LIMITS["components"]),
+            )
+            errors.raise_if_any()
+        spec_of = _spec_builder(comps, registry, errors, atmosphere)
+        broken = {}
+        for cname, ctable in comps.items():
+            spec = spec_of(cname)
+            if spec is not None:
+                specs.append(spec)
+            else:
+                broken[cname] = ctable
+        _network(specs, errors, broken)
+        cells = sum(
+            v
+            for c in specs
+            for k, v in c.params.items()
+            if k in ("n_volumes", "n_sections") and isinstance(v, int)
+        )
+        if cells > LIMITS["cells"]:
+            errors.add(
+                ("components",),
+                None,
+                limit_message(
+                    "the number of volumes and sections in the plant", cells, LIMITS["cells"]
+                ),
+            )
+    nodes = _node_guesses(data.get("nodes"), specs, comps, errors)
+    errors.raise_if_any()
+    return PlantSpec(
+        path=str(path),
+        name=name,
+        description=description,
+        simulation=sim,
+        components=specs,
+        medium=medium,
+        imports=imports,
+        atmosphere=atmosphere,
+        nodes=nodes,
+    )
+
+
+def _node_guesses(data, specs, comps, errors: Problems) -> dict[str, dict[str, float]]:
+    """The ``[nodes.<name>]`` tables: guesses of a node's state for the start, ``p``
+    [Pa] and ``T`` [K] or ``h`` [J/kg] (numbers in SI or unit strings), in SI. The node
+    must be one the components' ports name."""
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        errors.add((), "nodes", f"expected tables [nodes.<name>], got {type_name(data)}")
+        return {}
+    known = {n for c in specs for n in c.ports.values()}
+    for table in (comps or {}).values():  # the nodes of components reported as invalid
+        ports = table.get("ports") if isinstance(table, dict) else None
+        if isinstance(ports, dict):
+            known.update(n for n in ports.values() if isinstance(n, str))
+    out = {}
+    for node, table in data.items():
+        where = ("nodes", node)
+        if node not in known:
+            errors.add(
+                where,
+                None,
+                f"unknown node '{node}': no component's ports name it"
+                + suggest(node, sorted(known)),
+            )
+            continue
+        if not isinstance(table, dict):
+            errors.add(where, None, f"expected a table with p and T or h, got {type_name(table)}")
+            continue
+        guess = {}
+        for key, v in table.items():
+            unit = NODE_GUESS_KEYS.get(key)
+            if unit is None:
+                errors.add(
+                    where,
+                    key,
+                    "unknown key; a node guess has p (pressure), T (temperature) or h (specific "
+                    f"enthalpy){suggest(key, tuple(NODE_GUESS_KEYS))}",
+                )
+                continue
+            x = quantity(v, unit, errors, where, key)
+            if x is None:
+                continue
+            if not math.isfinite(x) or (key != "h" and not x > 0):
+                errors.add(
+                    where, key, f"{v!r} must be {'finite' if key == 'h' else 'finite and > 0'}"
+                )
+                continue
+            guess[key] = x
+        if "T" in guess and "h" in guess:
+            errors.add(where, "h", "give T or h as the guess, not both")
+            continue
+        if not guess and not [k for k in table if k not in NODE_GUESS_KEYS]:
+            errors.add(where, None, 'empty node guess: give p = "... bar" and T = "... degC" or h')
+            continue
+        out[node] = guess
+    return out
+
+
+# --------------------------------------------------------------------------- building
+
+
+def notices(spec: PlantSpec, text: str | None = None) -> list[str]:
+    """Notes ``dnasim check`` prints about choices that are valid but not physical,
+    located like problems: a pipe with ``internal_energy = "mean"`` (the seed's eq.
+    10.12c: after a step of the inflow the outflow first jumps the other way, and a
+    gas may leave colder than anything in the plant)."""
+    errors = Problems(str(spec.path), _LineIndex(text) if text is not None else None)
+    for c in spec.components:
+        if c.params.get("internal_energy") == "mean":
+            errors.add(
+                ("components", c.name),
+                "internal_energy",
+                'internal_energy = "mean" is the seed\'s U = M (u_in + u_out)/2 '
+                "(eq. 10.12c), kept as its option but not physical: after a step of the "
+                "inflow the outflow first jumps the other way, and a gas may leave colder "
+                'than anything in the plant; "outlet" (the default, a mixed volume) has '
+                "neither artefact",
+            )
+    return errors.items
+
+
+_COMPONENT_MESSAGE = re.compile(
+    r"^(?P<lead>\s*(?:- )?)component '(?P<name>[^']+)'(?: \((?P<type>[\w.]+)\))?"
+    r"(?:, key '(?P<key>[^']+)')?: (?P<rest>.*)$",
+    re.S,
+)
+
+
+def locate_messages(path, messages: Sequence[str]) -> list[str]:
+    """Messages of the later stages (compiler, start) that begin with ``component
+    'NAME' (Type)[, key 'KEY']: ...``, located in the plant file as the file's own
+    problems are: ``plant.toml, [components.NAME], key 'KEY', line N: (Type) ...``.
+    Other messages, and a file that cannot be read, are left as they are."""
+    try:
+        text = Path(str(path)).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return list(messages)
+    lines = _LineIndex(text)
+    out = []
+    for msg in messages:
+        m = _COMPONENT_MESSAGE.match(msg)
+        if m is None:
+            out.append(msg)
+            continue
+        errors = Problems(str(path), lines)
+        kind = f"{m['type']} '{m['name']}': " if m["type"] else ""
+        errors.add(("components", m["name"]), m["key"], kind + m["rest"])
+        out.append(m["lead"] + errors.items[0])
+    return out
+
+
+def _port_example(ports) -> str:
+    return ", ".join(f'{q} = "n{i}"' for i, q in enumerate(ports, 1)) or 'inlet = "n1"'
+
+
+def _key_named(msg: str, table_data: dict) -> str | None:
+    """The parameter of the component's table that its own message names first
+    ("z_max must be greater than z_min" -> 'z_max'), for the key and line; None
+    when it names none."""
+    best = None
+    for key in table_data:
+        if key in RESERVED_KEYS or not isinstance(key, str):
+            continue
+        m = re.search(rf"(?<![\w.]){re.escape(key)}(?![\w])", msg)
+        if m and (best is None or m.start() < best[0]):
+            best = (m.start(), key)
+    return best[1] if best else None
+
+
+def _strip_component_prefix(msg: str, name: str) -> str:
+    """The component's own message names it; the table already does."""
+    return re.sub(rf"^component '{re.escape(name)}'( \(\w+\))?: ", "", msg)
+
+
+def load(path: str | Path, *, allow_import: bool = False) -> LoadedPlant:
+    """Read, validate and build: the plant, its ``[simulation]`` settings and its spec.
+
+    ``allow_import=True`` imports the modules a ``[plant] import`` key names (their
+    code runs); without it such a file is refused with a ``PlantError`` saying so."""
+    data, text = read_plant_file(path)
+    spec = parse_plant(data, str(path), text, allow_import=allow_import)
+    plant = build_plant(spec)
+    return LoadedPlant(plant=plant, simulation=spec.simulation, spec=spec, path=str(path))
+
+
+def loads(text: str, path: str = "<string>", *, allow_import: bool = False) -> LoadedPlant:
+    """Like :func:`load` for TOML text."""
+    data = _decode(text, path)
+    spec = parse_plant(data, path, text, allow_import=allow_import)
+    return LoadedPlant(plant=build_plant(spec), simulation=spec.simulation, spec=spec, path=path)
+
+
+def load_plant(path: str | Path, *, allow_import: bool = False):
+    """The ``Plant`` described by a TOML plant file, the same object the Python API builds.
+
+    The file's ``[simulation]`` settings are attached as ``plant.simulation``
+    (a :class:`SimulationSettings`); ``simulate_plant(plant)`` runs with them::
+
+        plant = dnasim.load_plant("plants/attemperator.toml")
+        res = plant.simulate(plant.simulation.t_end, rtol=1e-6, atol_scaled=1e-8)
+        df = res.to_dataframe()
+    """
+    return load(path, allow_import=allow_import).plant
+
+
+def simulate_plant(plant, settings: SimulationSettings | None = None, **overrides):
+    """``plant.simulate`` with a file's settings; keyword arguments override them."""
+    from dnasim.run.simulation import simulation_keywords
+
+    s = settings or getattr(plant, "simulation", None) or SimulationSettings()
+    kwargs = simulation_keywords(s)
+    t_end = overrides.pop("t_end", s.t_end)
+    if overrides.get("solver") is not None:
+        from dnasim.run.backends import SOLVER_OPTIONS
+
+        kwargs = {k: v for k, v in kwargs.items() if k not in SOLVER_OPTIONS}
+    kwargs.update(overrides)
+    return plant.simulate(t_end, **kwargs)

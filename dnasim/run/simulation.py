@@ -1,0 +1,228 @@
+"""simulate(system, solver, sinks) -> Results: integrate a compiled plant.
+
+Backends are in ``dnasim.run.backends``, sinks in ``dnasim.run.sinks``.
+
+    system = compile(plant)
+    res = simulate(system, t_end=100.0, solver=NordsieckBDF(rtol=1e-6, atol_scaled=1e-6),
+                   sinks=[CSVSink("out/results.csv")])
+
+Contracts
+---------
+* A solver is an object with ``name`` and ``solve(problem) -> DAEResult-like``
+  (fields t, y, yp, success, status, message, event_log, stats, step_history,
+  sol). It sees a ``Problem``: the residual, the sparsity, the algebraic mask,
+  the switch functions, the tstops, the consistent start and the tolerances as
+  arrays. It never sees components or the System.
+* A sink is an object with ``open(names, units)``, ``write(t, row)`` and
+  ``close()``; ``simulate`` streams every output point (t [s], the row of
+  ``System.output_row`` and the restart flag: ``dnasim.run.sinks.OutputRows``) into
+  every sink while the solver runs. ``dnasim run`` writes its results.csv
+  through the same ``CSVSink`` and rows.
+* Tolerances: ``rtol`` is relative; ``atol_scaled`` is an absolute tolerance
+  relative to each variable's scale, atol_i = atol_scaled * max(nominal_i,
+  |y0_i|) (``System.atol_vector``), so a pressure ~1e5 Pa gets 1e5 times the
+  absolute tolerance of a valve opening ~1. One default everywhere:
+  rtol = 1e-6, atol_scaled = 1e-6. (``dnasim.solve_dae`` works on a bare DAE
+  with no scales; its ``atol`` is the absolute atol_i itself.)
+* Failures: a solver failure ends the run with ``Results.success`` False and the
+  reason in ``message``; ``throw=True`` raises ``DAEError`` with the Results as
+  ``err.result``. ``dnasim.solve_dae`` has the same ``throw`` with the same
+  default. A plant that cannot start (no consistent initial values)
+  raises ``DAEError`` (there are no rows to return).
+"""
+
+from __future__ import annotations
+
+import time
+from functools import partial
+
+import numpy as np
+
+from dnasim.core.errors import DAEError, PlantError
+from dnasim.run.backends import IDA, NordsieckBDF, Problem
+from dnasim.run.results import Results, strictly_increasing
+from dnasim.run.sinks import CSVSink, OutputRows
+
+__all__ = ["CSVSink", "IDA", "NordsieckBDF", "simulate", "simulation_keywords"]
+
+
+def simulation_keywords(settings) -> dict:
+    """``simulate`` keywords from a plant file's ``SimulationSettings`` (the
+    solver options rtol, atol_scaled, max_order, max_step, max_steps build the
+    default ``NordsieckBDF``)."""
+    kw = {
+        "rtol": settings.rtol,
+        "atol_scaled": settings.atol_scaled,
+        "max_order": settings.max_order,
+        "t0": settings.t_start,
+        "start": settings.start,
+        "t_eval": settings.t_eval(),
+    }
+    if settings.max_step is not None:
+        kw["max_step"] = settings.max_step
+    if settings.max_steps is not None:
+        kw["max_steps"] = settings.max_steps
+    return kw
+
+
+def simulate(
+    system,
+    *,
+    t_end: float,
+    solver=None,
+    sinks=(),
+    t0: float = 0.0,
+    start: str = "steady",
+    initial=None,
+    t_eval=None,
+    callback=None,
+    throw: bool = False,
+    **solver_options,
+) -> Results:
+    """Integrate ``system`` from t0 to t_end [s]; returns ``Results``.
+
+    solver: a backend object (default ``NordsieckBDF()``); keywords not listed
+    here (rtol, atol_scaled, max_order, max_step, h0, ...) build the default
+    backend instead. start: "steady" or "given" (``dnasim.start.initial``); initial: an
+    already consistent (y0, yp0). sinks: output writers (``CSVSink``, ...);
+    callback(t, y, yp): called at every output point. throw: raise ``DAEError``
+    (with ``err.result``) instead of returning Results with success False.
+    """
+    from dnasim.start.initial import initial_values, reinitialise
+
+    if solver is None:
+        solver = NordsieckBDF(**solver_options)
+    elif solver_options:
+        raise PlantError(
+            f"simulate(): give the options {', '.join(sorted(solver_options))} to the solver "
+            f"object ({type(solver).__name__}(...)), not next to it"
+        )
+    if not t_end > t0:
+        raise PlantError(f"t_end ({t_end}) must be greater than t0 ({t0})")
+    t_start = time.perf_counter()
+    if initial is None:
+        y0, yp0 = initial_values(system, t0, start)
+    else:
+        y0, yp0 = (np.array(v, dtype=float) for v in initial)
+    t_init = time.perf_counter() - t_start
+
+    sinks = list(sinks)
+    rows = OutputRows(system, t0, t_end)
+    if sinks:
+        for s in sinks:
+            s.open(rows.names, rows.units)
+
+    def point(t, y, yp):
+        if sinks:
+            row = rows.row(t, y, yp)
+            for s in sinks:
+                s.write(t, row)
+        if callback is not None:
+            callback(t, y, yp)
+
+    pb = problem_for(
+        system,
+        t0,
+        t_end,
+        y0,
+        yp0,
+        solver.atol_scaled,
+        t_eval=t_eval,
+        callback=point if (sinks or callback is not None) else None,
+        reinitialise=partial(reinitialise, system),
+    )
+    t_start = time.perf_counter()
+    try:
+        raw = solver.solve(pb)
+    finally:
+        for s in sinks:
+            s.close()
+    wall = time.perf_counter() - t_start
+    res = results_from(system, raw, solver.name, wall_time=wall, init_time=t_init)
+    if throw and not res.success:
+        err = DAEError(res.message)
+        err.result = res
+        raise err
+    return res
+
+
+def problem_for(system, t0, t_end, y0, yp0, atol_scaled, **options) -> Problem:
+    """The ``Problem`` a solver backend integrates for ``system`` from consistent
+    (y0, yp0) at t0 to t_end [s]: residual, sparsity, switches, tstops, names and
+    atol_i = atol_scaled * scale_i (``System.atol_vector``); ``options`` are the
+    output settings (t_eval, output_interval, callback, reinitialise)."""
+    return Problem(
+        residual=system.residual,
+        t_span=(float(t0), float(t_end)),
+        y0=y0,
+        yp0=yp0,
+        algebraic=system.algebraic,
+        jac_sparsity=system.jac_sparsity,
+        events=system.events,
+        tstops=system.tstops(t0, t_end),
+        atol=system.atol_vector(atol_scaled, y0),
+        quadrature=system.quadrature,
+        variable_names=list(system.names),
+        equation_names=list(system.eq_names),
+        **options,
+    )
+
+
+def results_from(system, raw, solver_name="", wall_time=None, init_time=None) -> Results:
+    """``Results`` from a solver's raw result (strictly increasing t, named events)."""
+    t = np.asarray(raw.t, dtype=float)
+    y = np.asarray(raw.y, dtype=float)
+    yp = np.asarray(raw.yp, dtype=float)
+    keep, restart = strictly_increasing(t)
+    t, y, yp = t[keep], y[:, keep], yp[:, keep]
+    names = system.output_names()
+
+    def values():
+        rows = np.array([system.output_row(t[k], y[:, k], yp[:, k]) for k in range(t.size)])
+        return rows.T if rows.size else np.zeros((len(names), 0))
+
+    stats = dict(raw.stats)
+    if wall_time is not None:
+        stats["wall_time"] = wall_time
+    if init_time is not None:
+        stats["init_time"] = init_time
+    events = system.events
+    log = []
+    for entry in raw.event_log:
+        e = dict(entry)
+        idx = e.get("event")
+        if idx is not None and 0 <= idx < len(events):
+            ev = events[idx]
+            e["component"] = ev.component
+            e["switch"] = ev.switch.name
+            e.setdefault("name", ev.name)
+        log.append(e)
+    success, message = bool(raw.success), str(raw.message)
+    # a terminal switch that stands for a modelling error (e.g. flow into the
+    # plant through a sink-only boundary) ends the run as a failure with the
+    # component's own plain message
+    for e in reversed(log if getattr(raw, "status", 1) == 1 else []):
+        idx = e.get("event")
+        if e.get("terminal") and idx is not None and 0 <= idx < len(events):
+            text = events[idx].message(e["t"])
+            if text:
+                success, message = False, text
+            break
+    return Results(
+        t,
+        names,
+        system.output_units(),
+        values,
+        y=y,
+        yp=yp,
+        variable_names=list(system.names),
+        restart=restart,
+        events=log,
+        steps=np.asarray(raw.step_history),
+        stats=stats,
+        success=success,
+        message=message,
+        solver=solver_name,
+        sol=getattr(raw, "sol", None),
+        warnings=system.warnings(),
+    )
