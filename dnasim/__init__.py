@@ -9,7 +9,10 @@ The stages, each one object with one job (docs/architecture.md)::
     sw = sweep(spec, {"valve.C": [0.01, 0.02]}, executor=pool)   # many runs
 """
 
+from dnasim import moved_modules as _moved_modules
 from dnasim.core.errors import DAEError, DnasimError, PlantError, ResidualDomainError
+
+_moved_modules.install()  # old module paths (dnasim.compiler, ...) keep working
 
 __version__ = "0.1.0"
 

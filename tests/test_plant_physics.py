@@ -7,7 +7,13 @@ import warnings
 import numpy as np
 
 from dnasim.core.timefunctions import Table
-from dnasim.model.physics import friction_dp, lmtd, logarithmic_mean, softplus, valve_flow
+from dnasim.model.physics import (
+    friction_dp,
+    lmtd,
+    logarithmic_mean,
+    softplus,
+    valve_flow,
+)
 from dnasim.plant.examples import attemperator_plant
 
 

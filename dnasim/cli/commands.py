@@ -158,7 +158,7 @@ def _coolprop_cache(directory: str | None) -> None:
     ALTERNATIVE_TABLES_DIRECTORY); ``--coolprop-cache`` or $DNASIM_COOLPROP_CACHE,
     else CoolProp's default $HOME/.CoolProp."""
     directory = directory or os.environ.get("DNASIM_COOLPROP_CACHE") or None
-    from dnasim.plant.plant import plantfile
+    from dnasim.plant import plantfile
 
     plantfile.TABULAR_NOTICE = _tabular_notice
     if directory is None:

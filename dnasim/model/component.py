@@ -647,7 +647,7 @@ class Component:
             self.params[p.name] = self._validate(p, value)
         self.medium = None  # set by dnasim.compilation.compiler (dnasim.media medium object)
         self.medium_name = self.params.get("medium")
-        #: port name -> medium object, set by dnasim.compilation.compiler (media may differ per port)
+        #: port name -> medium object, set by the compiler (media may differ per port)
         self.port_media: dict = {}
         self.setup()
 

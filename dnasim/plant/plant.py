@@ -44,7 +44,7 @@ class Plant(PlantGraph):
     ``[simulation]`` table as ``plant.simulation`` (a ``SimulationSettings``)."""
 
     def check(self):
-        """Shorthand for ``dnasim.compilation.compiler.check(plant)[0]``: the ``StructureReport``."""
+        """Shorthand for ``dnasim.compilation.compiler.check(plant)[0]`` (a ``StructureReport``)."""
         return check_plant(self)[0]
 
     def compile(self):

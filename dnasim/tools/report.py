@@ -304,7 +304,9 @@ _STAT_NAMES = {
 
 
 def _asset(name: str) -> str:
-    return resources.files("dnasim").joinpath("report_assets", name).read_text(encoding="utf-8")
+    return (
+        resources.files("dnasim.tools").joinpath("report_assets", name).read_text(encoding="utf-8")
+    )
 
 
 def _table(header, rows, num_cols=(), cls="") -> str:
