@@ -129,7 +129,8 @@ class ControlValve(Component):
                     homogeneous density, omega = 1/kappa_s of the equilibrium mixture),
                     steam or gas (omega = 1/kappa_s); choked at eps_c = 1 - eta_c
       z_e           = leakage + (1 - leakage) f(z)
-      f(z)          linear z; equal_percentage R^(z - 1) (for z < 0.01 linear to 0);
+      f(z)          linear z; equal_percentage R^(z - 1) (for z < 0.01 linear to 0,
+                    for z > 1 its tangent);
                     quick_opening 1 - (1 - z)^2; table: PCHIP through (char_z, char_f)
 
     clip(d, L) = d - softplus(d - L) + softplus(-d - L), width 1e-2 L: a smooth odd
@@ -380,6 +381,8 @@ class ControlValve(Component):
             R = self.params["rangeability"]
             if z < EQP_DELTA:
                 return z / EQP_DELTA * R ** (EQP_DELTA - 1.0)
+            if z > 1.0:  # beyond full opening (an iterate, or z_max > 1): the tangent at
+                return 1.0 + math.log(R) * (z - 1.0)  # z = 1, so R**(z-1) cannot overflow
             return R ** (z - 1.0)
         return float(self._table(z))
 
