@@ -16,11 +16,8 @@ Three old modules became packages of the same name (``dnasim.plant``, ``dnasim.s
 from __future__ import annotations
 
 import importlib
-import importlib.abc
 import importlib.machinery
-import importlib.util
 import sys
-import warnings
 
 __all__ = ["MOVED", "install", "package_getattr"]
 
@@ -89,7 +86,7 @@ MOVED: dict[str, str] = {
 }
 
 
-class _MovedLoader(importlib.abc.Loader):
+class _MovedLoader:  # an importlib Loader (importlib.abc costs 50 ms to import)
     def __init__(self, new: str):
         self.new = new
 
@@ -97,6 +94,8 @@ class _MovedLoader(importlib.abc.Loader):
         return None  # a placeholder; exec_module puts the real module in its place
 
     def exec_module(self, module):
+        import warnings
+
         old = module.__name__
         warnings.warn(
             f"the module {old} has moved to {self.new}; import it from there "
@@ -107,7 +106,7 @@ class _MovedLoader(importlib.abc.Loader):
         sys.modules[old] = importlib.import_module(self.new)
 
 
-class _MovedFinder(importlib.abc.MetaPathFinder):
+class _MovedFinder:  # an importlib MetaPathFinder
     """Finds the old paths of ``MOVED`` (and modules below an old package path, such as
     a plugin's ``dnasim.components.my_valve`` written into the old folder: none)."""
 
@@ -132,6 +131,8 @@ def package_getattr(package: str, old_module: str):
     def __getattr__(name: str):
         if name.startswith("__"):
             raise AttributeError(name)
+        import importlib.util
+
         try:
             spec = importlib.util.find_spec(f"{package}.{name}")
         except (ImportError, ValueError):
