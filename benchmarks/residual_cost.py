@@ -52,8 +52,8 @@ def _run(path):
     t0 = time.process_time()
     plant = dnasim.load_plant(str(ROOT / path))
     system = plant.compile()
-    kw = simulation_keywords(plant.simulation)
-    res = simulate(system, t_end=plant.simulation.t_end, **kw)
+    t_end, kw = simulation_keywords(plant.simulation)
+    res = simulate(system, t_end=t_end, **kw)
     return system, res, time.process_time() - t0
 
 

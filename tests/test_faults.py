@@ -712,12 +712,8 @@ def test_cli_results_are_the_csv_sink_of_simulate(tmp_path):
     loaded = load(PLANTS / "attemperator.toml")
     loaded.simulation.t_end = 150.0
     api = tmp_path / "api.csv"
-    simulate(
-        dnasim.compile(loaded.plant),
-        t_end=150.0,
-        sinks=[CSVSink(api)],
-        **simulation_keywords(loaded.simulation),
-    )
+    t_end, kw = simulation_keywords(loaded.simulation)
+    simulate(dnasim.compile(loaded.plant), t_end=t_end, sinks=[CSVSink(api)], **kw)
     res = invoke(
         "run", PLANTS / "attemperator.toml", "-o", tmp_path / "cli", "-q", "--t-end", "150 s"
     )

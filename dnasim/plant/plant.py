@@ -26,13 +26,10 @@ holds no System and no Results, and nothing below holds the plant.
 
 from __future__ import annotations
 
-import numpy as np
-
 from dnasim.compilation.compiler import check as check_plant
 from dnasim.compilation.compiler import compile as compile_plant
 from dnasim.core.errors import PlantError
 from dnasim.plant.graph import PlantGraph
-from dnasim.run.backends import SOLVER_OPTIONS
 from dnasim.run.simulation import simulate, simulation_keywords
 
 __all__ = ["Plant"]
@@ -61,19 +58,7 @@ class Plant(PlantGraph):
         """
         settings = getattr(self, "simulation", None)
         if settings is not None:
-            given = simulation_keywords(settings)
-            if kwargs.get("solver") is not None:  # the solver object brings its own options
-                given = {k: v for k, v in given.items() if k not in SOLVER_OPTIONS}
-            if t_end is not None and given.get("t_eval") is not None:
-                # the file's output grid, cut at (and ending on) the t_end asked for
-                grid = np.asarray(given["t_eval"], dtype=float)
-                grid = grid[grid <= t_end]
-                given["t_eval"] = (
-                    grid if grid.size and grid[-1] == t_end else (np.append(grid, t_end))
-                )
-            kwargs = {**given, **kwargs}
-            if t_end is None:
-                t_end = settings.t_end
+            t_end, kwargs = simulation_keywords(settings, t_end, **kwargs)
         if t_end is None:
             raise PlantError(f"plant '{self.name}': simulate() needs t_end [s]")
         return simulate(self.compile(), t_end=t_end, **kwargs)

@@ -1346,15 +1346,11 @@ def load_plant(path: str | Path, *, allow_import: bool = False):
 
 
 def simulate_plant(plant, settings: SimulationSettings | None = None, **overrides):
-    """``plant.simulate`` with a file's settings; keyword arguments override them."""
-    from dnasim.run.simulation import simulation_keywords
+    """``dnasim.simulate(compile(plant))`` with a file's settings; keyword arguments
+    override them (merged once, by ``dnasim.run.simulation.simulation_keywords``)."""
+    from dnasim.compilation.compiler import compile as compile_plant
+    from dnasim.run.simulation import simulate, simulation_keywords
 
     s = settings or getattr(plant, "simulation", None) or SimulationSettings()
-    kwargs = simulation_keywords(s)
-    t_end = overrides.pop("t_end", s.t_end)
-    if overrides.get("solver") is not None:
-        from dnasim.run.backends import SOLVER_OPTIONS
-
-        kwargs = {k: v for k, v in kwargs.items() if k not in SOLVER_OPTIONS}
-    kwargs.update(overrides)
-    return plant.simulate(t_end, **kwargs)
+    t_end, kwargs = simulation_keywords(s, overrides.pop("t_end", None), **overrides)
+    return simulate(compile_plant(plant), t_end=t_end, **kwargs)
