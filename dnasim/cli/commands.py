@@ -1,4 +1,4 @@
-"""The ``dnasim`` command: run, steady, sweep, check, components, plot, linearize.
+"""The ``dnasim`` command: run, steady, sweep, check, components, plot, linearize, fmu.
 
 Exit codes: 0 success; 1 the simulation failed or was interrupted (results up to
 that time are on disk); 2 bad input (plant file, options, paths).
@@ -1092,6 +1092,59 @@ def linearize(plant_file, inputs, outputs, at, out_dir, all_states, allow_import
         out.mkdir(parents=True, exist_ok=True)
         for f in (lm.save_npz(out / "linear.npz"), lm.save_mat(out / "linear.mat")):
             click.echo(f"wrote {f}")
+
+
+@main.command(name="fmu", context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+@click.option(
+    "-o", "--output", "out_file", default=None, metavar="FILE", help="The FMU (default PLANT.fmu)."
+)
+@click.option(
+    "--inputs",
+    "inputs",
+    default=None,
+    metavar="LIST",
+    help="Comma-separated parameters as FMU inputs (steam.T,pi.setpoint); default: every "
+    "boundary value, set point and opening of the plant.",
+)
+@click.option(
+    "--vars",
+    "var_patterns",
+    multiple=True,
+    metavar="PATTERN",
+    help="Outputs (names or patterns as run --vars); default: the signal outputs.",
+)
+def fmu_cmd(plant_file, out_file, inputs, var_patterns):
+    """Export PLANT.toml as an FMI 2.0 co-simulation FMU (pythonfmu; it needs Python
+    with dnasim at run time, docs/fmu.md)."""
+    from dnasim.core.errors import DnasimError
+    from dnasim.tools.fmu import build_fmu
+
+    loaded = _load(plant_file)
+    out = Path(out_file) if out_file else Path(plant_file).with_suffix(".fmu")
+    patterns = _split_patterns(var_patterns) or None
+    try:
+        path = build_fmu(
+            plant_file,
+            out,
+            _split_patterns([inputs]) if inputs is not None else None,
+            patterns,
+            loaded=loaded,
+        )
+    except DnasimError as exc:
+        raise InputError(f"{plant_file}: {exc}") from None
+    except OSError as exc:
+        raise InputError(f"{plant_file}: cannot write {out}: {exc.strerror or exc}") from None
+    from dnasim.tools.fmu import read_interface
+
+    iface = read_interface(path)
+    for note in iface.get("notes", ()):
+        click.echo(f"dnasim: note: {note}", err=True)
+    click.echo(
+        f"wrote {path}: FMI 2.0 co-simulation, {len(iface['inputs'])} inputs "
+        f"({', '.join(iface['inputs']) or 'none'}), {len(iface['outputs'])} outputs "
+        f"({', '.join(iface['outputs'])})"
+    )
 
 
 if __name__ == "__main__":  # pragma: no cover
