@@ -790,6 +790,11 @@ def read_interface(fmu) -> dict:
 
 
 def _version() -> str:
-    from dnasim import __version__
+    """dnasim's version (from the installed distribution: the package root is the
+    command-line stage and is not imported from here)."""
+    from importlib.metadata import PackageNotFoundError, version
 
-    return __version__
+    try:
+        return version("dnasim")
+    except PackageNotFoundError:
+        return "unknown"
