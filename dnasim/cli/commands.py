@@ -359,7 +359,6 @@ def _run(
     html_report=False,
     allow_import=False,
 ):
-    import math
 
     try:
         _prepare_output(out)
@@ -374,27 +373,19 @@ def _run(
         if x <= sim.t_start:
             raise InputError(f"option --t-end: must be after the start time {sim.t_start:g} s")
         sim.t_end = x
-    if rtol is not None:
-        if not 0 < rtol < 1:
-            raise InputError(f"option --rtol: must be > 0 and < 1 (got {rtol})")
-        sim.rtol = rtol
-    if atol is not None:
-        if not (atol > 0 and math.isfinite(atol)):
-            raise InputError(f"option --atol-scaled: must be a finite number > 0 (got {atol})")
-        sim.atol_scaled = atol
-    if max_order is not None:
-        sim.max_order = max_order
-    if max_steps is not None:
-        from dnasim.core.values import LIMITS, limit_message
+    from dnasim.plant.spec import setting_problem
 
-        if max_steps < 1:
-            raise InputError(f"option --max-steps: must be at least 1 (got {max_steps})")
-        if max_steps > LIMITS["max_steps"]:
-            raise InputError(
-                "option --max-steps: "
-                + limit_message("--max-steps", max_steps, LIMITS["max_steps"])
-            )
-        sim.max_steps = max_steps
+    for option, key, value in (
+        ("--rtol", "rtol", rtol),
+        ("--atol-scaled", "atol_scaled", atol),
+        ("--max-order", "max_order", max_order),
+        ("--max-steps", "max_steps", max_steps),
+    ):
+        if value is not None:
+            problem = setting_problem(key, value)
+            if problem:
+                raise InputError(f"option {option}: {problem.replace('max_steps', option)}")
+            setattr(sim, key, value)
     dt = _parse_option_quantity(output_interval, "s", "--output-interval")
     if dt is not None:
         sim.output_interval = dt

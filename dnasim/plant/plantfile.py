@@ -54,7 +54,13 @@ from dnasim.core.values import (
     suggest,
     type_name,
 )
-from dnasim.plant.spec import ComponentSpec, PlantSpec, SimulationSettings, build_plant
+from dnasim.plant.spec import (
+    ComponentSpec,
+    PlantSpec,
+    SimulationSettings,
+    build_plant,
+    setting_problem,
+)
 
 __all__ = [
     "load_plant",
@@ -441,10 +447,9 @@ def _simulation(data, errors: Problems) -> SimulationSettings:
         if k in sim:
             x = quantity(sim[k], "s", errors, table, k)
             if x is not None:
-                if k == "t_start" and x < 0:
-                    errors.add(table, k, f"must not be negative (got {x:g} s)")
-                elif k != "t_start" and x <= 0:
-                    errors.add(table, k, f"must be positive (got {x:g} s)")
+                problem = setting_problem(k, x)
+                if problem:
+                    errors.add(table, k, problem)
                 else:
                     setattr(s, k, x)
     if "t_end" in sim and "t_start" in sim and s.t_end <= s.t_start:
@@ -454,35 +459,22 @@ def _simulation(data, errors: Problems) -> SimulationSettings:
             s.check_output_points()
         except PlantError as exc:
             errors.add(table, "output_interval", str(exc).removeprefix("[simulation] "))
-    if "max_steps" in sim:
-        x = sim["max_steps"]
-        limit = LIMITS["max_steps"]
-        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
-            errors.add(table, "max_steps", f"expected a positive integer, got {x!r}")
-        elif x > limit:
-            errors.add(table, "max_steps", limit_message("max_steps", x, limit))
-        else:
-            s.max_steps = x
-    for k, lo, hi in (("rtol", 0.0, 1.0), ("atol_scaled", 0.0, math.inf)):
+    for k in ("rtol", "atol_scaled"):
         if k in sim:
             x = quantity(sim[k], "1", errors, table, k)
             if x is not None:
-                if not lo < x < hi:
-                    errors.add(table, k, f"must be > 0{' and < 1' if hi == 1 else ''} (got {x:g})")
+                problem = setting_problem(k, x)
+                if problem:
+                    errors.add(table, k, problem)
                 else:
                     setattr(s, k, x)
-    if "max_order" in sim:
-        x = sim["max_order"]
-        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= 5:
-            errors.add(table, "max_order", f"expected an integer from 1 to 5, got {x!r}")
-        else:
-            s.max_order = x
-    if "start" in sim:
-        x = sim["start"]
-        if not isinstance(x, str) or x.lower() not in ("steady", "given"):
-            errors.add(table, "start", f'expected "steady" or "given", got {x!r}')
-        else:
-            s.start = x.lower()
+    for k in ("max_steps", "max_order", "start"):
+        if k in sim:
+            problem = setting_problem(k, sim[k])
+            if problem:
+                errors.add(table, k, problem)
+            else:
+                setattr(s, k, sim[k].lower() if k == "start" else sim[k])
     return s
 
 

@@ -26,7 +26,39 @@ __all__ = [
     "build_plant",
     "limit_message",
     "output_point_count",
+    "setting_problem",
 ]
+
+
+def setting_problem(name: str, x) -> str | None:
+    """What is wrong with the value ``x`` (SI) of the ``[simulation]`` setting ``name``,
+    or None: the one statement of the rules, for the plant file (``plantfile``, which
+    adds the file, table, key and line) and the command line's options (``--rtol``,
+    ``--t-end``, ...). The solver checks its own arguments again, because
+    ``solve_dae`` is also called on a bare DAE with no settings."""
+    if name in ("t_end", "output_interval", "max_step"):
+        return None if x > 0 and not math.isnan(x) else f"must be positive (got {x:g} s)"
+    if name == "t_start":
+        return None if x >= 0 and math.isfinite(x) else f"must not be negative (got {x:g} s)"
+    if name == "rtol":
+        return None if 0 < x < 1 else f"must be > 0 and < 1 (got {x:g})"
+    if name == "atol_scaled":
+        return None if x > 0 and math.isfinite(x) else f"must be a finite number > 0 (got {x:g})"
+    if name == "max_order":
+        if isinstance(x, bool) or not isinstance(x, int) or not 1 <= x <= 5:
+            return f"expected an integer from 1 to 5, got {x!r}"
+        return None
+    if name == "max_steps":
+        if isinstance(x, bool) or not isinstance(x, int) or x < 1:
+            return f"expected a positive integer, got {x!r}"
+        if x > LIMITS["max_steps"]:
+            return limit_message("max_steps", x, LIMITS["max_steps"])
+        return None
+    if name == "start":
+        if not isinstance(x, str) or x.lower() not in ("steady", "given"):
+            return f'expected "steady" or "given", got {x!r}'
+        return None
+    raise KeyError(name)
 
 
 def output_point_count(t_start: float, t_end: float, interval: float) -> float:
