@@ -5,7 +5,8 @@ The stages, each one object with one job (docs/architecture.md)::
     spec = PlantSpec(...)  or  load_plant("plant.toml")   # data / the Plant graph
     system = compile(plant)                                # the DAE over plant-wide arrays
     res = simulate(system, t_end=100.0, solver=NordsieckBDF(), sinks=[CSVSink("r.csv")])
-    res["pipe.T_out"], res.to_dataframe(), res.to_xarray()
+    res["pipe.T_out"], res.to_dataframe(), res.to_xarray(), res.at(42.0)
+    res = read_results("results/plant")                    # a run's results.nc or .csv
     sw = sweep(spec, {"valve.C": [0.01, 0.02]}, executor=pool)   # many runs
 """
 
@@ -33,6 +34,7 @@ __all__ = [
     "System",
     "compile",
     "load_plant",
+    "read_results",
     "simulate",
     "solve_dae",
     "sweep",
@@ -56,6 +58,7 @@ _LAZY = {
     "IDA": "dnasim.run.simulation",
     "CSVSink": "dnasim.run.simulation",
     "Results": "dnasim.run.results",
+    "read_results": "dnasim.run.results",
     "sweep": "dnasim.tools.sweeps",
 }
 

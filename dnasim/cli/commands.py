@@ -270,6 +270,21 @@ _UNITS_OPTION = click.option(
 @click.option(
     "--output-interval", default=None, metavar="DT", help='Time between CSV rows, e.g. "1 s".'
 )
+@click.option(
+    "--format",
+    "result_format",
+    type=click.Choice(["csv", "netcdf", "both"]),
+    default="both",
+    show_default=True,
+    help="Results written while the run goes on: results.csv (text, one column per "
+    "variable), results.nc (netCDF-4, units in attributes, vectors as dimensions; "
+    "read with dnasim.read_results or xarray), or both.",
+)
+@click.option(
+    "--progress/--no-progress",
+    default=None,
+    help="Progress line on stderr [default: when stderr is a terminal and not -q].",
+)
 @click.option("--plot", is_flag=True, help="Write PNG plots (variables; step size and order).")
 @click.option(
     "--vars",
@@ -298,6 +313,8 @@ def run(
     max_order,
     max_steps,
     output_interval,
+    result_format,
+    progress,
     plot,
     var_patterns,
     units,
@@ -330,6 +347,8 @@ def run(
             units=units,
             html_report=html_report,
             allow_import=allow_import,
+            result_format=result_format,
+            progress=progress,
         )
     except (KeyboardInterrupt, _Terminate) as exc:  # outside the integration itself
         what = "SIGTERM" if isinstance(exc, _Terminate) else "Ctrl-C"
@@ -358,12 +377,19 @@ def _run(
     units="si",
     html_report=False,
     allow_import=False,
+    result_format="csv",
+    progress=None,
 ):
 
     try:
         _prepare_output(out)
     finally:
         _release_signals()  # a signal held since the start: delivered now
+    formats = ("csv", "netcdf") if result_format == "both" else (result_format,)
+    if "csv" not in formats and (plot or var_patterns or html_report):
+        raise InputError(
+            "options --plot/--vars/--report read results.csv: use --format csv or --format both"
+        )
     _coolprop_cache(coolprop_cache)
     loaded = _load(plant_file, allow_import)
     _freeze_setup_objects()
@@ -401,7 +427,7 @@ def _run(
 
     from dnasim.run.runner import RunOutcome, run_plant
 
-    show_progress = not quiet and sys.stdout.isatty()
+    show_progress = (not quiet and sys.stderr.isatty()) if progress is None else progress
     try:
         system = None
         if patterns:  # checked against the plant's outputs before anything runs
@@ -415,6 +441,7 @@ def _run(
             progress=show_progress,
             interrupt_types=(KeyboardInterrupt, _Terminate),
             system=system,
+            formats=formats,
         )
     except click.ClickException:
         raise

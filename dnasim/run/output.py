@@ -61,6 +61,7 @@ STEP_COLUMNS = ("time", "step_size", "order")
 #: the files a run writes into its output directory (removed before the next run)
 RESULT_FILES = (
     "results.csv",
+    "results.nc",
     "events.csv",
     "steps.csv",
     "variables.png",

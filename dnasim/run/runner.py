@@ -21,9 +21,10 @@ from typing import Any
 
 from dnasim.plant.plantinfo import describe_loaded, write_plant_json
 from dnasim.run.output import clear_results, write_events_csv, write_steps_csv
-from dnasim.run.sinks import RESTART_COLUMN, CSVSink, OutputRows
+from dnasim.run.sinks import RESTART_COLUMN, CSVSink, NetCDFSink, OutputRows
 
 __all__ = [
+    "FORMATS",
     "RESTART_COLUMN",
     "RunOutcome",
     "run_plant",
@@ -67,8 +68,11 @@ class RunOutcome:
         if self.status == "output-error":
             return self.message
         verb = "was interrupted" if self.status == "interrupted" else "failed"
+        streamed = [str(f) for f in self.files if f.name in _STREAMED]
+        streamed = streamed or [str(self.out_dir / "results.csv")]
         csv_note = (
-            f"; {self.out_dir / 'results.csv'} holds the {self.rows} rows up to that time"
+            f"; {streamed[0]} holds the {self.rows} rows up to that time"
+            + "".join(f", {f} the same rows" for f in streamed[1:])
             if self.rows
             else ""
         )
@@ -97,6 +101,40 @@ class RunOutcome:
         return "".join(f"note: {n}\n" for n in self.notes) + text
 
 
+#: the result formats of ``run_plant(formats=...)`` and ``dnasim run --format``: the file
+#: each writes while the run goes on
+FORMATS = {"csv": "results.csv", "netcdf": "results.nc"}
+_STREAMED = set(FORMATS.values())
+
+
+def netcdf_attributes(loaded) -> dict:
+    """Global attributes of results.nc: the plant's name, description and file, and
+    the ``[simulation]`` settings (``simulation_<key>``, SI: times in s)."""
+    sim = loaded.simulation
+    spec = getattr(loaded, "spec", None)
+    attrs = {
+        "title": getattr(spec, "name", "") or getattr(loaded.plant, "name", ""),
+        "description": getattr(spec, "description", "") or "",
+        "plant_file": str(getattr(loaded, "path", "") or ""),
+    }
+    for key in (
+        "t_start",
+        "t_end",
+        "output_interval",
+        "rtol",
+        "atol_scaled",
+        "max_order",
+        "start",
+        "max_step",
+        "max_steps",
+    ):
+        value = getattr(sim, key, None)
+        if value is not None:
+            attrs[f"simulation_{key}"] = value
+    attrs["simulation_solver"] = "NordsieckBDF"
+    return attrs
+
+
 # --------------------------------------------------------------------------- plant adapters
 
 
@@ -118,9 +156,12 @@ class _Progress:
         self.bar = None
         self.done = 0
         if enabled:
+            import sys
+
             import click
 
             self.bar = click.progressbar(
+                file=sys.stderr,  # one line, redrawn; stdout keeps the summary
                 length=1000,
                 label="simulating",
                 show_eta=True,
@@ -233,6 +274,7 @@ def run_plant(
     flush_seconds: float = 1.0,
     keep_rows: bool = False,
     system=None,
+    formats=("csv",),
 ) -> RunOutcome:
     """Simulate ``loaded`` (a ``dnasim.plant.plantfile.LoadedPlant``), streaming into ``out_dir``.
 
@@ -244,6 +286,9 @@ def run_plant(
     also holds them (t, y, yp) and its dense output. ``system``: the compiled
     ``loaded.plant`` when the caller has compiled it already (the command line, to
     check ``--vars`` against the outputs before the run); else it is compiled here.
+    ``formats``: the result files written while the run goes on, any of ``FORMATS``:
+    "csv" (results.csv, :class:`~dnasim.run.sinks.CSVSink`) and "netcdf" (results.nc,
+    :class:`~dnasim.run.sinks.NetCDFSink`, with :func:`netcdf_attributes`).
 
     Returns a :class:`RunOutcome`; failures of the simulation (``DAEError``),
     interrupts and a result file that cannot be written (status "output-error":
@@ -253,6 +298,10 @@ def run_plant(
     """
     from dnasim.core.errors import DAEError, OutputError
 
+    formats = [formats] if isinstance(formats, str) else list(formats)
+    unknown = [f for f in formats if f not in FORMATS]
+    if unknown or not formats:
+        raise ValueError(f"formats: {unknown or formats!r}; choose from {', '.join(FORMATS)}")
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -270,14 +319,15 @@ def run_plant(
     t_start = time.perf_counter()
 
     state: dict[str, Any] = {
-        "writer": None,  # the CSVSink of results.csv, opened at the first row
+        "writer": None,  # the first of the sinks (results.csv if written), opened at the first row
+        "sinks": [],
         "last_t": None,
         "prev_t": None,
         "steps": [],
         "output_error": None,
     }
     bar = _Progress(sim.t_start, sim.t_end, progress)
-    results_path = out / "results.csv"
+    paths = [out / FORMATS[f] for f in formats]
     # without an output interval the rows are the accepted steps: their spacing is the
     # step size, kept (3 floats a step) for steps.csv in case the solver hands nothing over
     rows_are_steps = sim.output_interval is None
@@ -286,12 +336,25 @@ def run_plant(
 
     def write(t, y, yp):
         try:
-            sink = state["writer"]
-            if sink is None:  # results.csv appears with the first row, not before
-                sink = CSVSink(results_path, flush_rows=flush_rows, flush_seconds=flush_seconds)
-                sink.open(rows.names, rows.units)
-                state["writer"] = sink
-            sink.write(t, rows.row(t, y, yp))
+            sinks = state["sinks"]
+            if not sinks:  # the result files appear with the first row, not before
+                for fmt, path in zip(formats, paths, strict=True):
+                    if fmt == "csv":
+                        sink = CSVSink(path, flush_rows=flush_rows, flush_seconds=flush_seconds)
+                    else:
+                        sink = NetCDFSink(
+                            path,
+                            flush_rows=flush_rows,
+                            flush_seconds=flush_seconds,
+                            attrs=netcdf_attributes(loaded),
+                            expected_rows=sim.output_points(),
+                        )
+                    sinks.append(sink)
+                    sink.open(rows.names, rows.units)
+                state["writer"] = sinks[0]
+            row = rows.row(t, y, yp)
+            for sink in sinks:
+                sink.write(t, row)
         except OutputError as exc:
             state["output_error"] = exc
             # a DAEError stops the solver, which then hands over its partial result
@@ -334,14 +397,21 @@ def run_plant(
             result = getattr(exc, "result", None)
     finally:
         bar.close()
-        w = state["writer"]
-        if w is not None:
+        for w in state["sinks"]:
+            if isinstance(w, NetCDFSink):
+                w.final_attrs = {"status": status, "message": message}
+                for k, v in (getattr(result, "stats", None) or {}).items():
+                    if isinstance(v, int | float) and not isinstance(v, bool):
+                        w.final_attrs[f"stats_{k}"] = v  # the solver's counters
             try:
                 w.close()
             except OutputError as exc:
                 if state["output_error"] is None:
                     state["output_error"] = exc
-            state["last_t"] = w.last_time  # the last row on disk
+        if state["sinks"]:
+            # the last row on disk in every file
+            reached = [w.last_time for w in state["sinks"]]
+            state["last_t"] = None if None in reached else min(reached)
     if state["output_error"] is not None:
         status, success = "output-error", False
         message = str(state["output_error"])
@@ -384,8 +454,8 @@ def run_plant(
             message += "; " + "; ".join(write_errors)
     elif status == "output-error":
         message += "; events.csv and steps.csv were written"
-    if state["writer"] is not None:
-        files.insert(0, results_path)
+    for path in reversed(paths[: len(state["sinks"])]):
+        files.insert(0, path)
     stats = dict(getattr(result, "stats", None) or {})
     return RunOutcome(
         success=success,
