@@ -42,11 +42,12 @@ def attemperator(tmp_path_factory):
 
     d = tmp_path_factory.mktemp("att")
     loaded = load(PLANTS / "attemperator.toml")
+    _, kw = simulation_keywords(loaded.simulation)
     res = simulate(
         dnasim.compile(loaded.plant),
         t_end=150.0,
         sinks=[NetCDFSink(d / "r.nc", attrs={"title": "attemperator"}), CSVSink(d / "r.csv")],
-        **simulation_keywords(loaded.simulation),
+        **kw,
     )
     assert res.success and res.restart.sum() >= 1
     return res, d
@@ -309,9 +310,8 @@ def test_at_on_a_run_matches_an_output_interval_run(attemperator):
     from dnasim.run.simulation import simulate, simulation_keywords
 
     loaded = load(PLANTS / "attemperator.toml")
-    kw = simulation_keywords(loaded.simulation)
-    kw["t_eval"] = grid
-    ref = simulate(dnasim.compile(loaded.plant), t_end=100.0, **kw)
+    t_end, kw = simulation_keywords(loaded.simulation, 100.0, t_eval=grid)
+    ref = simulate(dnasim.compile(loaded.plant), t_end=t_end, **kw)
     got = res.at(ref.t)["pipe.T_out"]
     np.testing.assert_allclose(got, ref["pipe.T_out"], atol=0.5)
 
