@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dnasim.library import physics
+from dnasim.model import physics
 
 numba_lmtd = pytest.importorskip("dnasim.model.lmtd_numba")
 
