@@ -6,9 +6,12 @@ solver counters, to show that a refactoring keeps every number to the bit.
     python benchmarks/bit_identity.py --compare before.txt after.txt
 
 Each plant runs through ``dnasim.load_plant(path).simulate(t_end)``, with its file's
-settings, to its file's t_end (cut at ``T_END_MAX`` seconds of plant time). The digest covers t, the restart flags, every output column
-(sorted by name), the solver's y and yp, the events and the steps; the counters are
-printed beside it (steps, residual evaluations, Jacobians, LU decompositions).
+settings, to its file's t_end (cut at ``T_END_MAX`` seconds of plant time). The
+digest covers t, the restart flags, every output column (sorted by name), the
+solver's y and yp, the events and the steps; the counters are printed beside it
+(steps, residual evaluations, Jacobians, LU decompositions). The plants are those of
+plants/, tests/plants/ and tests/field/ (names prefixed with their folder); a plant
+that fails to load or run is fingerprinted by its error's type and message.
 """
 
 from __future__ import annotations
@@ -48,13 +51,21 @@ def digest(res) -> str:
     return h.hexdigest()[:16]
 
 
-def run(path: Path) -> tuple[str, str, float]:
+def run(path: Path) -> tuple[str, str, float, float]:
     import dnasim
 
-    plant = dnasim.load_plant(path)
+    try:
+        plant = dnasim.load_plant(path)
+    except Exception as err:  # noqa: BLE001 - an input error is a result too
+        msg = f"{type(err).__name__}: {err}"
+        return hashlib.sha256(msg.encode()).hexdigest()[:16], "load error", 0.0, 0.0
     t_end = min(plant.simulation.t_end, T_END_MAX)
     c0 = time.process_time()
-    res = plant.simulate(t_end)
+    try:
+        res = plant.simulate(t_end)
+    except Exception as err:  # noqa: BLE001 - a refused run is a result too
+        msg = f"{type(err).__name__}: {err}"
+        return hashlib.sha256(msg.encode()).hexdigest()[:16], "run error", 0.0, t_end
     cpu = time.process_time() - c0
     st = res.stats
     counts = "steps={} res={} jac={} lu={}".format(
@@ -75,13 +86,16 @@ def main(argv):
             same = b[:3] == a[:3]
             print(f"| {name} | {' '.join(b[:3])} | {' '.join(a[:3])} | {'yes' if same else 'NO'} |")
         return 0
-    paths = sorted((ROOT / "plants").glob("*.toml"))
+    paths = []
+    for folder in ("plants", "tests/plants", "tests/field"):
+        paths += sorted((ROOT / folder).glob("*.toml"))
     if argv:
         paths = [p for p in paths if p.stem in argv]
     print("plant\tt_end\tdigest\tcounts\tcpu_s")
     for p in paths:
         d, counts, cpu, t_end = run(p)
-        print(f"{p.stem}\t{t_end:g}\t{d}\t{counts}\t{cpu:.1f}", flush=True)
+        name = str(p.relative_to(ROOT).with_suffix(""))
+        print(f"{name}\t{t_end:g}\t{d}\t{counts}\t{cpu:.1f}", flush=True)
     return 0
 
 
