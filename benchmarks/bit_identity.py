@@ -74,10 +74,20 @@ def run(path: Path) -> tuple[str, str, float, float]:
     return digest(res), counts, cpu, t_end
 
 
+def table(path) -> dict[str, str]:
+    """plant -> the rest of its line (t_end, digest, counts, cpu) of a file this
+    script printed; other lines (a shell's timing) are left out."""
+    out = {}
+    for line in Path(path).read_text().splitlines()[1:]:
+        if line.count("\t") >= 3:
+            name, rest = line.split("\t", 1)
+            out[name] = rest
+    return out
+
+
 def main(argv):
     if argv[:1] == ["--compare"]:
-        before = dict(line.split("\t", 1) for line in Path(argv[1]).read_text().splitlines()[1:])
-        after = dict(line.split("\t", 1) for line in Path(argv[2]).read_text().splitlines()[1:])
+        before, after = table(argv[1]), table(argv[2])
         print("| plant | before | after | identical |")
         print("|---|---|---|---|")
         for name in sorted(set(before) | set(after)):

@@ -72,6 +72,12 @@ class Medium(ABC):
             return self.registry_call
         return super().__reduce_ex__(protocol)
 
+    def __deepcopy__(self, memo):
+        """A medium copies as itself: one instance per fluid, shared with its cache
+        (``dnasim.compilation.compiler.own_components`` deep-copies the components of a
+        plant, and any medium one of them holds stays the shared one)."""
+        return self
+
     def __init__(self, name: str, backend: str, *, cache_size: int = 4096) -> None:
         self.name = name
         self.backend = backend
