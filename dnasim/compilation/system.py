@@ -62,7 +62,7 @@ a class that offers batches (``batch_key()``, ``batch(blocks)``: the library's
 ``Pipe``) with one key together, as one vectorised block over the plant-wide vectors
 (``dnasim.library.pipe.PipeBatch``), and the components with scalar rows
 (``Component.row_reads``: boundaries, valves, sensors, controllers, attemperators,
-junctions) in one ``dnasim.model.component.ScalarRows``: their values gathered through
+junctions) in one ``dnasim.model.evaluation.ScalarRows``: their values gathered through
 index arrays made once, no name look-up per value, and each component's
 ``row_values``, where its equations are written (once: its ``Component.residual`` is
 derived from the same function). Each unit gives every row the same number as the
@@ -104,7 +104,7 @@ import scipy.sparse as sp
 
 from dnasim.compilation.limits import limit_event
 from dnasim.core.errors import PlantError, ResidualDomainError
-from dnasim.model.component import ROWS_KEY, LocalVector, ScalarRows
+from dnasim.model.evaluation import ROWS_KEY, LocalVector, ScalarRows
 from dnasim.model.physics import upwind_weight
 
 NODE_P_NOMINAL = 1e5  # Pa
