@@ -407,3 +407,16 @@ def test_a_system_pickle_and_the_system_hold_none_of_the_plants_objects():
     assert not [o for o in reachable(back) if id(o) in ids]
     # and the plant holds no medium object: compile gave the media to the System only
     assert not holds(plant, Medium, System)
+
+
+@pytest.mark.parametrize(
+    "name", ["attemperator", "superheater_line", "turbine_trip_safety_valve", "rankine"]
+)
+def test_compile_and_simulate_write_nothing_into_the_plant(name):
+    # the whole plant, pickled, is the same byte for byte after a compile and a run
+    # (before issue 21 the components came back with media, input units and caches)
+    plant = load(ROOT / "plants" / f"{name}.toml").plant
+    before = pickle.dumps(plant)
+    plant.compile()
+    assert plant.simulate(5.0).success
+    assert pickle.dumps(plant) == before
