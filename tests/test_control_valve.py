@@ -199,3 +199,34 @@ def test_pump_trip_behind_a_check_valve_plant_file():
     # the pump's discharge falls to the tank pressure, the line stays at the header's
     assert res["n_discharge.p"][-1] == pytest.approx(1e5, rel=1e-3)
     assert res["n_check.p"][-1] == pytest.approx(5e5, rel=1e-3)
+
+
+def test_the_vapour_pressure_is_asked_of_the_medium():
+    # issue 21: the valve called IF97 and CoolProp itself; now the medium answers
+    # (Medium.p_sat, Medium.critical_point), so a medium of any backend, a plugin's
+    # too, gives the choked-flow limit its own saturation line
+    import ast
+    from pathlib import Path
+
+    from dnasim.library import control_valve
+    from dnasim.media import IF97Water
+
+    class Shifted(IF97Water):  # IF97 water with a saturation line 10 % higher (test only)
+        def p_sat(self, T):
+            return 1.1 * super().p_sat(T)
+
+        @property
+        def critical_point(self):
+            return self.T_critical, 2.0 * self.p_critical
+
+    medium = Shifted()
+    p_v, p_c = control_valve.vapour_pressure(medium, 450.0)
+    assert p_v == 1.1 * IF97Water().p_sat(450.0) and p_c == 2.0 * 22.064e6
+    tree = ast.parse(Path(control_valve.__file__).read_text())
+    imported = {
+        a.name if isinstance(n, ast.Import) else (n.module or "")
+        for n in ast.walk(tree)
+        if isinstance(n, ast.Import | ast.ImportFrom)
+        for a in n.names
+    }
+    assert not [m for m in imported if m.startswith("CoolProp") or "if97" in m], imported

@@ -222,3 +222,23 @@ def test_the_check_finds_a_back_import(tmp_path):
 def test_known_back_references_are_gone(module, forbidden):
     g = import_graph()
     assert not g.has_edge(module, forbidden)
+
+
+def test_the_model_names_keep_their_import_path():
+    # issue 21: dnasim.model.component was split into declarations (Param, ports,
+    # Variable, Equation, Switch, Output), evaluation (LocalVector, ScalarRows) and the
+    # Component base; every moved name still imports from dnasim.model.component, as
+    # the same object
+    from dnasim.model import component, declarations, evaluation
+
+    for mod in (declarations, evaluation):
+        for name in mod.__all__:
+            assert getattr(component, name) is getattr(mod, name), (mod.__name__, name)
+            assert name in component.__all__, name
+    # each of the three has one job: the declarations and the evaluation views import
+    # no Component, the evaluation no declaration
+    mods = all_modules()
+    for name in ("dnasim.model.declarations", "dnasim.model.evaluation"):
+        assert "dnasim.model.component" not in {m for m, _ in imports_of(name, mods[name], mods)}
+    ev = "dnasim.model.evaluation"
+    assert "dnasim.model.declarations" not in {m for m, _ in imports_of(ev, mods[ev], mods)}

@@ -470,3 +470,49 @@ def test_bicubic_water(water_heos):
         assert st.rho == pytest.approx(ref.rho, rel=1e-4)
         assert st.drho_dh_p == pytest.approx(ref.drho_dh_p, rel=1e-2)
         assert st.drho_dp_h == pytest.approx(ref.drho_dp_h, rel=1e-2)
+
+
+# --------------------------------------------------------------------------
+# The vapour pressure and the critical point, asked of the medium (issue 21: a control
+# valve and a pump called IF97 and CoolProp directly). IAPWS R7-97(2012) Table 35:
+# p_sat(T) of region 4 [MPa]; the critical point of IAPWS-95, T_c = 647.096 K,
+# p_c = 22.064 MPa.
+IF97_TABLE_35 = [(300.0, 0.353658941e-2), (500.0, 0.263889776e1), (600.0, 0.123443146e2)]
+
+
+@pytest.mark.parametrize("T, p_MPa", IF97_TABLE_35)
+def test_if97_p_sat_verification_table(water, T, p_MPa):
+    # the table's nine digits: relative 1e-8
+    assert water.p_sat(T) == pytest.approx(p_MPa * 1e6, rel=1e-8)
+
+
+@pytest.mark.parametrize("fluid", ["Water", "R134a"])
+def test_heos_p_sat_and_critical_point(fluid):
+    import CoolProp.CoolProp as CP
+
+    medium = get_medium(fluid, backend="HEOS")
+    T_c, p_c = medium.critical_point
+    assert T_c == CP.PropsSI("Tcrit", f"HEOS::{fluid}")
+    assert p_c == CP.PropsSI("pcrit", f"HEOS::{fluid}")
+    for T in (0.7 * T_c, 0.95 * T_c):  # CoolProp's own (T, Q = 0) flash, to the bit
+        assert medium.p_sat(T) == CP.PropsSI("P", "T", T, "Q", 0, f"HEOS::{fluid}")
+    assert medium.p_sat(T_c + 10.0) == p_c  # above the critical temperature: p_c
+
+
+def test_critical_point_and_p_sat_at_and_above_it(water, water_heos):
+    assert water.critical_point == (647.096, 22.064e6)
+    # IF97 caps T at T_c: its saturation line ends at p_c (to the kernel's round-off,
+    # 1e-8 relative)
+    assert water.p_sat(700.0) == water.p_sat(647.096) == pytest.approx(22.064e6, rel=1e-8)
+    # the two water models agree on the saturation line (IF97's stated deviation from
+    # IAPWS-95 is below 0.025 % in p_sat)
+    assert water.p_sat(450.0) == pytest.approx(water_heos.p_sat(450.0), rel=2.5e-4)
+
+
+def test_a_gas_has_no_vapour_pressure(air):
+    assert all(math.isnan(v) for v in air.critical_point)
+    with pytest.raises(PropertyError, match="Air .*p_sat.*no two-phase region"):
+        air.p_sat(300.0)
+    flue = get_medium("FlueGas")
+    with pytest.raises(PropertyError, match="no two-phase region"):
+        flue.p_sat(300.0)

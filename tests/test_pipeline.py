@@ -298,3 +298,125 @@ def test_a_shorter_run_of_a_file_with_an_output_grid_ends_on_its_own_t_end():
     res = load_plant(ROOT / "plants" / "evaporator.toml").simulate(t_end=12.0)
     assert res.success, res.message
     assert list(res.t) == [0.0, 5.0, 10.0, 12.0]
+
+
+# ------------------------------------------------------------------ compile is one-way
+# (issue 21: compile() wrote the media, input units and converted parameters into the
+# Plant's own components, so a second compile changed every System compiled before)
+
+
+def _plant_component_ids(plant) -> set[int]:
+    return {id(c) for c in plant.components.values()}
+
+
+def test_a_second_compile_with_another_medium_leaves_the_first_system_as_it_was():
+    from dnasim.media import get_medium
+
+    plant = air_pipe_plant(2)
+    first = compile_plant(plant)
+    y0, yp0 = initial_values(first, 0.0, "given")
+    F0 = first.residual(1.0, y0, yp0)
+    plant.default_medium = "FlueGas"  # an ideal-gas mixture: another h(T), another T(h)
+    second = compile_plant(plant)
+    # the first System keeps its own components and media: the same residual to the bit
+    # (the issue measured it moving by 1.1e4 when the pipe took the second medium)
+    np.testing.assert_array_equal(first.residual(1.0, y0, yp0), F0)
+    air, flue = get_medium("Air"), get_medium("FlueGas")
+    for name in ("source", "pipe1", "valve", "exhaust"):
+        assert first.components[name].medium is air, name
+        assert set(first.components[name].port_media.values()) == {air}, name
+        assert second.components[name].medium is flue, name
+    assert set(first.node_media.values()) == {air}
+    # the second System is another DAE at the same point (it is not the first's)
+    assert not np.array_equal(second.residual(1.0, y0, yp0), F0)
+    # the Plant was not written by either compile: no media on its components
+    for comp in plant.components.values():
+        assert comp.medium is None and comp.port_media == {}
+    # each System holds its own component objects, none of the Plant's
+    ids = _plant_component_ids(plant)
+    assert not ids & {id(c) for c in first.components.values()}
+    assert not {id(c) for c in first.components.values()} & {
+        id(c) for c in second.components.values()
+    }
+
+
+def test_a_parameter_or_connection_changed_after_compile_leaves_the_system_as_it_was():
+    plant = air_pipe_plant(2)
+    system = compile_plant(plant)
+    y0, yp0 = initial_values(system, 0.0, "given")
+    F0 = system.residual(1.0, y0, yp0)
+    plant.components["pipe1"].params["kA"] *= 2.0  # [W/K]
+    plant.components["source"].params["T"] = Step(0.0, 600.0, 700.0)  # [K]
+    plant.connections[("valve", "outlet")] = "elsewhere"
+    np.testing.assert_array_equal(system.residual(1.0, y0, yp0), F0)
+    assert system.connections[("valve", "outlet")] != "elsewhere"
+
+
+def test_signal_units_are_resolved_on_the_systems_components_not_the_plants():
+    # a controller gain in the unit of its linked signal ("0.02 1/K") is converted per
+    # System; the Plant's controller keeps the text it was given, so a second compile
+    # (after a change of the link) converts it again
+    from dnasim.library import PIController
+
+    plant = attemperator_plant()
+    old = plant.components["pi"]
+    params = {**old.params}
+    for k in ("Kp", "KI"):
+        params.pop(k)
+    plant.components["pi"] = PIController(
+        "pi",
+        Kp="0.02 1/K",
+        KI="6e-4 1/(K.s)",
+        **{k: v for k, v in params.items() if v is not None and k not in ("Kp", "KI")},
+    )
+    system = compile_plant(plant)
+    assert system.components["pi"].params["Kp"] == pytest.approx(0.02, rel=1e-12)
+    assert plant.components["pi"].params["Kp"] is None
+    assert plant.components["pi"].signal_unit_values["Kp"] == "0.02 1/K"
+    assert getattr(plant.components["pi"], "input_units", {}) == {}
+    again = compile_plant(plant)
+    assert again.components["pi"].params["Kp"] == system.components["pi"].params["Kp"]
+
+
+def test_compile_simulate_compile_again_gives_identical_results():
+    plant = attemperator_plant()
+    a = simulate(compile_plant(plant), t_end=300.0)
+    b = simulate(compile_plant(plant), t_end=300.0)
+    first, second = compile_plant(plant), compile_plant(plant)
+    c, d = simulate(first, t_end=300.0), simulate(second, t_end=300.0)
+
+    def counts(res):  # the solver's counters (its timings differ from run to run)
+        return {k: v for k, v in res.stats.items() if not k.endswith("time")}
+
+    assert a.success and counts(a) == counts(b) == counts(c) == counts(d)
+    for res in (b, c, d):
+        np.testing.assert_array_equal(res.t, a.t)
+        for name in a:
+            np.testing.assert_array_equal(res[name], a[name], err_msg=name)
+
+
+def test_a_system_pickle_and_the_system_hold_none_of_the_plants_objects():
+    from dnasim.media.base import Medium
+
+    plant = attemperator_plant()
+    system = compile_plant(plant)
+    ids = _plant_component_ids(plant)
+    assert not [o for o in reachable(system) if id(o) in ids]
+    back = pickle.loads(pickle.dumps(system))
+    assert not [t for t in pickled_types(system) if issubclass(t, PlantGraph | PlantSpec)]
+    assert not [o for o in reachable(back) if id(o) in ids]
+    # and the plant holds no medium object: compile gave the media to the System only
+    assert not holds(plant, Medium, System)
+
+
+@pytest.mark.parametrize(
+    "name", ["attemperator", "superheater_line", "turbine_trip_safety_valve", "rankine"]
+)
+def test_compile_and_simulate_write_nothing_into_the_plant(name):
+    # the whole plant, pickled, is the same byte for byte after a compile and a run
+    # (before issue 21 the components came back with media, input units and caches)
+    plant = load(ROOT / "plants" / f"{name}.toml").plant
+    before = pickle.dumps(plant)
+    plant.compile()
+    assert plant.simulate(5.0).success
+    assert pickle.dumps(plant) == before

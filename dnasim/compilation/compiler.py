@@ -19,19 +19,44 @@ Steps, each once:
    ``structure.analyse_system``), and algebraic loops through signals only
    (``signal_loops``).
 
-The System keeps no reference to the Plant; the components it holds get their
-media (``component.port_media[port]``, and ``component.medium`` when all their
-ports carry one fluid).
+One way: compile never writes into the Plant. Before anything is set, the
+components are copied (``own_components``: a deep copy of each, made once per
+compile, media shared as the one ``get_medium`` instance per fluid), and everything
+compile decides is set on the copies, which the System keeps as its own: the media
+(``component.port_media[port]``, and ``component.medium`` when all their ports carry
+one fluid), the units of the linked signals (``component.input_units``), the
+parameters converted in those units (``Component.resolve_signal_units``), and every
+cache a component fills while it is evaluated. Two Systems of one Plant share no
+component; a Plant changed and compiled again leaves every System compiled before as
+it was. The System keeps no reference to the Plant; the resolved signal sources are
+handed to it (``link_sources``), not resolved again.
 """
 
 from __future__ import annotations
 
 from copy import copy as shallow_copy
+from copy import deepcopy
+from dataclasses import replace
 
 from dnasim.compilation.structure import StructureReport, analyse_graph, analyse_system
 from dnasim.core.errors import PlantError
 
-__all__ = ["compile", "check", "resolve_media", "signal_sources"]
+__all__ = ["compile", "check", "resolve_media", "signal_sources", "link_sources", "own_components"]
+
+
+def own_components(plant):
+    """A copy of ``plant`` for one compile: the same class and attributes, its own
+    ``components`` (a deep copy of each component, in one pass so that objects the
+    components share stay shared; a medium copies as itself, ``Medium.__deepcopy__``),
+    ``connections`` and ``links``. What compile sets on a component (media, input
+    units, converted parameters) and what a component caches while it is evaluated
+    then belong to the System it makes, never to the caller's plant."""
+    memo: dict = {}
+    copy = shallow_copy(plant)
+    copy.components = {name: deepcopy(comp, memo) for name, comp in plant.components.items()}
+    copy.connections = dict(plant.connections)
+    copy.links = dict(plant.links)
+    return copy
 
 
 def resolve_media(plant) -> tuple[dict, dict, list[str]]:
@@ -91,7 +116,8 @@ def resolve_media(plant) -> tuple[dict, dict, list[str]]:
 
 
 def _media_objects(plant, port_fluids, node_fluids, errors):
-    """get_medium for every fluid name; sets the components' media. Returns
+    """get_medium for every fluid name; sets the media of ``plant``'s components (the
+    copies of ``own_components``, never the caller's). Returns
     (node_media, port_media) as name -> medium object."""
     from dnasim.media import get_medium
 
@@ -140,14 +166,15 @@ def check(plant):
     analyse_graph(plant, report)
     if report.errors:
         return report, None
-    plant, problems = signal_sources(plant)
+    plant = own_components(plant)  # from here on: the System's components, not the caller's
+    plant, problems, sources = link_sources(plant)
     if problems:
         report.errors.extend(problems)
         return report, None
     port_fluids, node_fluids, errors = resolve_media(plant)
     node_media, port_media = _media_objects(plant, port_fluids, node_fluids, errors)
     try:
-        system = System(plant, node_media, port_media)
+        system = System(plant, node_media, port_media, sources)
     except PlantError as err:
         report.errors.extend(errors)
         report.errors.append(str(err))
@@ -166,14 +193,26 @@ def check(plant):
 
 
 def signal_sources(plant):
-    """Resolve every signal link (``dnasim.plant.signals``): ``(plant, problems)``.
+    """Resolve every signal link (``dnasim.plant.signals``): ``(plant, problems)``,
+    the first two of ``link_sources``."""
+    plant, problems, _ = link_sources(plant)
+    return plant, problems
+
+
+def link_sources(plant):
+    """Resolve every signal link (``dnasim.plant.signals``), once per compile:
+    ``(plant, problems, sources)``.
 
     Returns the plant to compile: the given one, or, when a link reads a node
     temperature ("n_hdr.T"), a copy with one ideal ``TemperatureSensor`` (tau = 0)
     probing that node, named "n_hdr~T", and the link reading its output. The
     caller's plant is not changed. ``problems``: plain-words messages naming both
     ends of each bad link (unknown source, a vector without an index, a
-    dimension that does not fit the input)."""
+    dimension that does not fit the input). ``sources``: (component, input) ->
+    ``dnasim.plant.signals.Source`` of the plant returned (a node temperature: the
+    probe's output), each with its final unit (a signal output of unit "*" takes
+    the unit its block derives from its own linked inputs, ``signal_output_unit``);
+    empty when there are problems. The System takes them as they are."""
     from dnasim.plant.signals import NODE_QUANTITIES, dimension_problem, node_sensor_name, resolve
 
     nodes = set(plant.node_names())
@@ -192,7 +231,7 @@ def signal_sources(plant):
         else:
             sources[(dname, inp)] = found
     if problems:
-        return plant, problems
+        return plant, problems, {}
 
     def unit_of(key, seen=()):
         src = sources[key]
@@ -218,10 +257,14 @@ def signal_sources(plant):
         if msg:
             problems.append(msg)
     if problems:
-        return plant, problems
+        return plant, problems, {}
+    resolved = {}
+    for key, src in sources.items():
+        unit = unit_of(key)
+        resolved[key] = src if unit == src.unit else replace(src, unit=unit)
     temps = sorted({s.owner for s in sources.values() if s.kind == "node" and s.ref == "T"})
     if not temps:
-        return plant, []
+        return plant, [], resolved
     from dnasim.library.sensor import TemperatureSensor
 
     copy = shallow_copy(plant)  # the same class and attributes; new dicts below
@@ -234,8 +277,10 @@ def signal_sources(plant):
         copy.connections[(name, "port")] = node
     for key, src in sources.items():
         if src.kind == "node" and src.ref == "T":
-            copy.links[key] = (node_sensor_name(src.owner), "T")
-    return copy, []
+            probe = node_sensor_name(src.owner)
+            copy.links[key] = (probe, "T")
+            resolved[key] = resolve(probe, "T", copy.components[probe])
+    return copy, [], resolved
 
 
 def signal_loops(system) -> list[str]:

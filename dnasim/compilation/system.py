@@ -62,7 +62,7 @@ a class that offers batches (``batch_key()``, ``batch(blocks)``: the library's
 ``Pipe``) with one key together, as one vectorised block over the plant-wide vectors
 (``dnasim.library.pipe.PipeBatch``), and the components with scalar rows
 (``Component.row_reads``: boundaries, valves, sensors, controllers, attemperators,
-junctions) in one ``dnasim.model.component.ScalarRows``: their values gathered through
+junctions) in one ``dnasim.model.evaluation.ScalarRows``: their values gathered through
 index arrays made once, no name look-up per value, and each component's
 ``row_values``, where its equations are written (once: its ``Component.residual`` is
 derived from the same function). Each unit gives every row the same number as the
@@ -104,7 +104,7 @@ import scipy.sparse as sp
 
 from dnasim.compilation.limits import limit_event
 from dnasim.core.errors import PlantError, ResidualDomainError
-from dnasim.model.component import ROWS_KEY, LocalVector, ScalarRows
+from dnasim.model.evaluation import ROWS_KEY, LocalVector, ScalarRows
 from dnasim.model.physics import upwind_weight
 
 NODE_P_NOMINAL = 1e5  # Pa
@@ -194,12 +194,16 @@ class PlantEvent:
 class System:
     """The plant as a DAE: residual, sparsity, masks, events, tstops, names.
 
-    ``plant``: read while building, not kept; ``node_media``: node name ->
-    medium object (or None); ``port_media``: (component, port) -> medium object.
-    Built once by ``dnasim.compilation.compiler.compile``.
+    ``plant``: read while building, not kept (the compiler's copy: its components,
+    ``dnasim.compilation.compiler.own_components``, become the System's own);
+    ``node_media``: node name -> medium object (or None); ``port_media``: (component,
+    port) -> medium object; ``sources``: (component, input) ->
+    ``dnasim.plant.signals.Source`` of every link, resolved by the compiler
+    (``link_sources``), with final units. Built once by
+    ``dnasim.compilation.compiler.compile``.
     """
 
-    def __init__(self, plant, node_media=None, port_media=None):
+    def __init__(self, plant, node_media=None, port_media=None, sources=None):
         self.name = plant.name
         self.components = dict(plant.components)
         self.node_names = list(plant.node_names())
@@ -216,14 +220,19 @@ class System:
         #: discrete modes, component name -> {key: value}; the components read and
         #: write them through ``LocalVector.modes`` (e.g. a controller's saturation)
         self.modes = {name: {} for name in self.components}
-        self._build(plant)
+        if sources is None and plant.links:
+            raise PlantError(
+                f"plant '{plant.name}': a System is built by dnasim.compile(plant), which "
+                "resolves the signal links (System(plant, ..., sources) needs them)"
+            )
+        self._build(plant, dict(sources or {}))
 
     # ------------------------------------------------------------------ build
-    def _build(self, plant):
+    def _build(self, plant, sources):
         # each component learns the units of the signals linked to its inputs, so that
         # quantities in the unit of a measured signal (a controller's set point and
-        # error) carry it into the results
-        sources = _link_sources(plant)
+        # error) carry it into the results; the components are the System's own (the
+        # compiler's copies), so this is written into no Plant
         for comp in plant.components.values():
             comp.input_units = {}
         for (dname, inp), src in sources.items():
@@ -721,33 +730,6 @@ def evaluation_units(blocks) -> list:
         else:
             units.append(type(u[0].comp).batch(u))
     return units
-
-
-def _link_sources(plant) -> dict:
-    """(component, input) -> ``dnasim.plant.signals.Source`` of every link; a signal
-    output of unit "*" gets the unit its block derives from its linked inputs'
-    (``Component.signal_output_unit``: the first input's by default)."""
-    from dnasim.plant.signals import resolve
-
-    nodes = set(plant.node_names())
-    out = {}
-    for key, (sname, ref) in plant.links.items():
-        src = resolve(sname, ref, plant.components.get(sname), sname in nodes)
-        if not hasattr(src, "kind") or (src.kind == "node" and src.ref == "T"):
-            raise PlantError(  # dnasim.compilation.compiler.signal_sources reports these first
-                f"component '{key[0]}': signal input '{key[1]}': cannot read '{sname}.{ref}'"
-                + (f": {src}" if isinstance(src, str) else "")
-            )
-        out[key] = src
-    for _ in range(len(out)):
-        for key, src in out.items():
-            if src.unit == "*":
-                ins = {k[1]: s.unit for k, s in out.items() if k[0] == src.owner}
-                owner = plant.components[src.owner]
-                unit = owner.signal_output_unit(src.variable, ins) if ins else "*"
-                if unit != "*":
-                    out[key] = type(src)(src.owner, src.ref, src.kind, src.variable, unit)
-    return out
 
 
 def _group_nodes(node_names, node_index, node_media):

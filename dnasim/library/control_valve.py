@@ -62,17 +62,9 @@ def odd_limit(d, limit, width):
 
 
 def vapour_pressure(medium, T):
-    """(p_v [Pa], p_c [Pa]): vapour pressure at T [K] (p_c above T_c) and the critical pressure."""
-    if getattr(medium, "backend", "") == "IF97":
-        from dnasim.media import if97_kernel as K
-
-        return float(K.p_sat(min(T, K.T_C))), float(K.P_C)
-    import CoolProp.CoolProp as CP
-
-    fluid = f"{medium.backend}::{medium.name}" if "HEOS" in medium.backend else medium.name
-    T_c = CP.PropsSI("Tcrit", fluid)
-    p_c = CP.PropsSI("pcrit", fluid)
-    return (p_c if T >= T_c else CP.PropsSI("P", "T", T, "Q", 0, fluid)), p_c
+    """(p_v [Pa], p_c [Pa]): vapour pressure at T [K] (p_c above T_c) and the critical
+    pressure, asked of the medium (``Medium.p_sat``, ``Medium.critical_point``)."""
+    return medium.p_sat(T), medium.critical_point[1]
 
 
 def hem_omega(medium, st):

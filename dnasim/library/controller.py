@@ -5,6 +5,11 @@ back-calculation anti-windup, tracking, per-unit gains); this one is the seed's.
 
 from __future__ import annotations
 
+from dnasim.library.submodels.limited_output import (
+    LIMITED,
+    MODE_ROUNDOFF,
+    output_range_problems,
+)
 from dnasim.model.component import (
     Component,
     Equation,
@@ -15,9 +20,7 @@ from dnasim.model.component import (
     Variable,
 )
 
-#: a start value of v within this fraction of the output range of a limit counts as
-#: inside the limits (PIController.init_discrete_state)
-MODE_ROUNDOFF = 1e-12
+__all__ = ["PIController", "check_set_point_unit", "output_range_problems", "MODE_ROUNDOFF"]
 
 
 def check_set_point_unit(comp) -> None:
@@ -43,20 +46,6 @@ def check_set_point_unit(comp) -> None:
         )
 
 
-def output_range_problems(comp, x) -> list[str]:
-    """A controller's output z outside [z_min, z_max] at a state at rest (the steady
-    start engages a limit instead; ``Component.steady_problems``)."""
-    P = comp.params
-    z, lo, hi = x["z"], P["z_min"], P["z_max"]
-    tol = MODE_ROUNDOFF * max(abs(hi - lo), abs(hi), abs(lo))
-    if lo - tol <= z <= hi + tol:
-        return []
-    return [
-        f"controller '{comp.name}' ({type(comp).__name__}) has the output z = {z:.4g}, "
-        f"outside its range [{lo:g}, {hi:g}]"
-    ]
-
-
 class PIController(Component):
     """PI controller with an output limited to [z_min, z_max] by switch variables.
 
@@ -71,7 +60,8 @@ class PIController(Component):
                     z = z_min               mode "low"
 
     Switch functions (10.13e), positive while the mode holds, crossing zero from
-    above when it must change (direction -1):
+    above when it must change (direction -1; the limited output of
+    ``dnasim.library.submodels.limited_output``, shared with the PID and the limiters):
       upper: mode free: z_max - v  -> enter "high";  mode high: v - z_max -> leave to "free"
       lower: mode free: v - z_min  -> enter "low";   mode low:  z_min - v -> leave to "free"
     With anti_windup the integrator is held while saturated, so v - z_max would
@@ -163,12 +153,12 @@ class PIController(Component):
         return self.param_at("setpoint", t)
 
     def reset_discrete_state(self, modes):
-        modes["mode"] = "free"
+        LIMITED.reset(modes)
 
     @staticmethod
     def _mode(x):
         """The mode, from the System-owned dict (``LocalVector.modes``)."""
-        return x.modes.get("mode", "free")
+        return LIMITED.mode(x.modes)
 
     @property
     def measured_unit(self) -> str:
@@ -242,12 +232,9 @@ class PIController(Component):
         P = self.params
         e, measured, m_p, m_I, z, *w = v
         w = w[0] if self.setpoint_from_signal else self.param_at("setpoint", t)
-        mode = modes.get("mode", "free")
-        hold = P["anti_windup"] and mode != "free"
-        if mode == "free":
-            output = z - (m_p + m_I)
-        else:
-            output = z - (P["z_max"] if mode == "high" else P["z_min"])
+        mode = LIMITED.mode(modes)
+        hold = P["anti_windup"] and mode != LIMITED.FREE
+        output = z - LIMITED.target(mode, m_p + m_I, P["z_min"], P["z_max"])
         return [
             e - self.sign * (measured - w),
             m_p - P["Kp"] * e,
@@ -260,39 +247,25 @@ class PIController(Component):
         return 1.0 if (self.params["Kp"] + self.params["KI"]) >= 0 else -1.0
 
     def _upper(self, t, x, xp):
-        v = x["m_p"] + x["m_I"]
-        z_max = self.params["z_max"]
-        if self._mode(x) != "high":
-            return z_max - v
-        if self.params["anti_windup"]:
+        mode = self._mode(x)
+        if mode == "high" and self.params["anti_windup"]:
             # leave when the error turns to drive the output down
             return self._gain_sign() * x["e"]
-        return v - z_max
+        return LIMITED.upper(x["m_p"] + x["m_I"], self.params["z_max"], mode)
 
     def _lower(self, t, x, xp):
-        v = x["m_p"] + x["m_I"]
-        z_min = self.params["z_min"]
-        if self._mode(x) != "low":
-            return v - z_min
-        if self.params["anti_windup"]:
+        mode = self._mode(x)
+        if mode == "low" and self.params["anti_windup"]:
             return -self._gain_sign() * x["e"]
-        return z_min - v
+        return LIMITED.lower(x["m_p"] + x["m_I"], self.params["z_min"], mode)
 
     def _toggle_upper(self, t, x, xp):
-        if self._mode(x) == "high":
-            x.modes["mode"] = "free"
-            if self.params["anti_windup"]:
-                x["m_I"] = self.params["z_max"] - x["m_p"]  # bumpless: v = z_max
-        else:
-            x.modes["mode"] = "high"
+        if LIMITED.toggle(x.modes, "high") == "high" and self.params["anti_windup"]:
+            x["m_I"] = self.params["z_max"] - x["m_p"]  # bumpless: v = z_max
 
     def _toggle_lower(self, t, x, xp):
-        if self._mode(x) == "low":
-            x.modes["mode"] = "free"
-            if self.params["anti_windup"]:
-                x["m_I"] = self.params["z_min"] - x["m_p"]
-        else:
-            x.modes["mode"] = "low"
+        if LIMITED.toggle(x.modes, "low") == "low" and self.params["anti_windup"]:
+            x["m_I"] = self.params["z_min"] - x["m_p"]
 
     def switches(self):
         return [
@@ -307,18 +280,9 @@ class PIController(Component):
         "low" with e of the sign that leaves it at once, the leave switch never
         crossed, and the feed stayed off (the level fell to 24 m3 instead of being held
         at 67 m3)."""
-        v = x["m_p"] + x["m_I"]
-        old = self._mode(x)
         P = self.params
         tol = MODE_ROUNDOFF * max(abs(P["z_max"] - P["z_min"]), abs(P["z_max"]), abs(P["z_min"]))
-        if v > P["z_max"] + tol:
-            mode = "high"
-        elif v < P["z_min"] - tol:
-            mode = "low"
-        else:
-            mode = "free"
-        x.modes["mode"] = mode
-        return mode != old
+        return LIMITED.start(x.modes, x["m_p"] + x["m_I"], P["z_min"], P["z_max"], tol)
 
     def initial_guess(self, t0, x):
         x["m_I"] = self.params["integral0"]
@@ -331,7 +295,7 @@ class PIController(Component):
         reads the integral m_I: the steady start keeps it (``Component.free_at_rest``).
         With anti_windup it is held (dm_I/dt = 0, the state is at rest); without, it
         winds at dm_I/dt = KI e."""
-        return ("m_I",) if self._mode(x) != "free" else ()
+        return ("m_I",) if self._mode(x) != LIMITED.FREE else ()
 
     def design_values(self, t0, x):
         return {"opening": x["z"]}

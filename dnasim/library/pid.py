@@ -6,7 +6,8 @@ from __future__ import annotations
 import math
 
 from dnasim.core.errors import PlantError
-from dnasim.library.controller import check_set_point_unit, output_range_problems
+from dnasim.library.controller import check_set_point_unit
+from dnasim.library.submodels.limited_output import LIMITED, output_range_problems
 from dnasim.model.component import Component, Equation, Output, Param, SignalPort, Switch, Variable
 
 __all__ = ["PIDController"]
@@ -40,8 +41,9 @@ class PIDController(Component):
     measurement only, so a set-point step gives no derivative kick. Its filter time
     constant is T_d/N.
 
-    Output limits are switch variables (seed eq. 10.13e), positive while the mode
-    holds, direction -1:
+    Output limits are switch variables (seed eq. 10.13e; the limited output of
+    ``dnasim.library.submodels.limited_output``), positive while the mode holds,
+    direction -1:
       upper: mode free: z_max - v -> "high";  mode high: v - z_max -> back to "free"
       lower: mode free: v - z_min -> "low";   mode low:  z_min - v -> back to "free"
 
@@ -336,11 +338,7 @@ class PIDController(Component):
             if P["anti_windup"] and P["T_i"] is not None:
                 rate += ((track if tracking else z) - dem) / self.T_t
             integral = vp[0] - rate
-            mode = modes.get("mode", "free")
-            if mode == "free":
-                output = z - dem
-            else:
-                output = z - (P["z_max"] if mode == "high" else P["z_min"])
+            output = z - LIMITED.target(LIMITED.mode(modes), dem, P["z_min"], P["z_max"])
         return out + [integral, dem - m_p - m_I - m_D, output]
 
     def _e_d(self, measured, w) -> float:
@@ -349,27 +347,25 @@ class PIDController(Component):
 
     # ------------------------------------------------------------- switches
     def reset_discrete_state(self, modes):
-        modes["mode"] = "free"
+        LIMITED.reset(modes)
 
     @staticmethod
     def _mode(x):
-        return x.modes.get("mode", "free")
+        return LIMITED.mode(x.modes)
 
     def _upper(self, t, x, xp):
         if not self._automatic(t):
             return 1.0
-        d = self.params["z_max"] - x["v"]
-        return -d if self._mode(x) == "high" else d
+        return LIMITED.upper(x["v"], self.params["z_max"], self._mode(x))
 
     def _lower(self, t, x, xp):
         if not self._automatic(t):
             return 1.0
-        d = x["v"] - self.params["z_min"]
-        return -d if self._mode(x) == "low" else d
+        return LIMITED.lower(x["v"], self.params["z_min"], self._mode(x))
 
     def _toggle(self, which):
         def action(t, x, xp):
-            x.modes["mode"] = "free" if self._mode(x) == which else which
+            LIMITED.toggle(x.modes, which)
 
         return action
 
@@ -380,11 +376,8 @@ class PIDController(Component):
         ]
 
     def init_discrete_state(self, t0, x, xp):
-        v, old = x["v"], self._mode(x)
         P = self.params
-        mode = "high" if v > P["z_max"] else "low" if v < P["z_min"] else "free"
-        x.modes["mode"] = mode
-        return mode != old
+        return LIMITED.start(x.modes, x["v"], P["z_min"], P["z_max"])
 
     def initial_guess(self, t0, x):
         P = self.params
@@ -404,7 +397,7 @@ class PIDController(Component):
         anti_windup the back-calculation term reads the demand v, so m_I is determined
         (at rest v - z_lim = T_t Kp e / T_i); without an I part m_I is an accumulator."""
         P = self.params
-        if self._mode(x) == "free" or P["T_i"] is None or P["anti_windup"]:
+        if self._mode(x) == LIMITED.FREE or P["T_i"] is None or P["anti_windup"]:
             return ()
         return ("m_I",) if self._automatic(t0) else ()
 

@@ -46,9 +46,10 @@ meaningful magnitude. A crossing of u2 through zero is a switch ("divisor sign")
 that the integrator locates and logs in the results' events (events.csv), with
 ``stop_at_zero = true`` it ends the run there with that message.
 
-Limits are switch functions with modes (as the controller's output limits),
-never clips inside Newton: in each mode the residual is smooth, and the
-integrator locates the crossing and restarts at order 1.
+Limits are switch functions with modes (as the controller's output limits: one
+implementation, ``dnasim.library.submodels.limited_output``), never clips inside
+Newton: in each mode the residual is smooth, and the integrator locates the crossing
+and restarts at order 1.
 
 Limiter modes: "free" (y = u), "high" (y = y_max), "low" (y = y_min); switch
 "upper": free: y_max - u (enter "high" when it crosses zero), high: u - y_max
@@ -85,6 +86,7 @@ from dnasim.core.timefunctions import Ramp as _RampFunction
 from dnasim.core.timefunctions import Sine as _SineFunction
 from dnasim.core.timefunctions import Step as _StepFunction
 from dnasim.core.timefunctions import Table as _TableFunction
+from dnasim.library.submodels.limited_output import LIMITED, RATE_LIMITED
 from dnasim.model.component import Component, Equation, Param, SignalPort, Switch, Variable
 
 __all__ = [
@@ -392,14 +394,16 @@ class FirstOrderLag(_Block):
 
 
 class _Modes(_Block):
+    """A block with a limited quantity (``LIMITS``: a ``LimitedOutput``)."""
+
     REGISTER = False
+    LIMITS = LIMITED
 
     def reset_discrete_state(self, modes):
-        modes["mode"] = "free"
+        self.LIMITS.reset(modes)
 
-    @staticmethod
-    def _mode(x):
-        return x.modes.get("mode", "free")
+    def _mode(self, x):
+        return self.LIMITS.mode(x.modes)
 
 
 class Limiter(_Modes):
@@ -429,36 +433,20 @@ class Limiter(_Modes):
         ]
 
     def _limit(self, t, x, xp):
-        mode = self._mode(x)
-        if mode == "free":
-            return x["y"] - x["u"]
-        return x["y"] - (self.params["y_max"] if mode == "high" else self.params["y_min"])
-
-    def _upper(self, t, x, xp):
-        d = self.params["y_max"] - x["u"]
-        return -d if self._mode(x) == "high" else d
-
-    def _lower(self, t, x, xp):
-        d = x["u"] - self.params["y_min"]
-        return -d if self._mode(x) == "low" else d
-
-    def _toggle(self, which):
-        def action(t, x, xp):
-            x.modes["mode"] = "free" if self._mode(x) == which else which
-
-        return action
+        P = self.params
+        return x["y"] - LIMITED.target(self._mode(x), x["u"], P["y_min"], P["y_max"])
 
     def switches(self):
-        return [
-            Switch("upper", self._upper, -1, self._toggle("high"), "enter/leave y = y_max"),
-            Switch("lower", self._lower, -1, self._toggle("low"), "enter/leave y = y_min"),
-        ]
+        P = self.params
+        return LIMITED.switches(
+            lambda t, x, xp: x["u"],
+            lambda t, x: P["y_min"],
+            lambda t, x: P["y_max"],
+            docs=("enter/leave y = y_max", "enter/leave y = y_min"),
+        )
 
     def init_discrete_state(self, t0, x, xp):
-        u, old = x["u"], self._mode(x)
-        mode = "high" if u > self.params["y_max"] else "low" if u < self.params["y_min"] else "free"
-        x.modes["mode"] = mode
-        return mode != old
+        return LIMITED.start(x.modes, x["u"], self.params["y_min"], self.params["y_max"])
 
 
 class RateLimiter(_Modes):
@@ -469,6 +457,8 @@ class RateLimiter(_Modes):
     gives y = y0 + R_up t until u - y = R_up T, then the lag's exponential
     approach. T (default 0.1 s) keeps every mode index 1 (an ideal y = u would not).
     """
+
+    LIMITS = RATE_LIMITED
 
     PARAMS = (
         Param("R_up", "1/s", doc="largest rising rate [unit of u per second]", min=0.0),
@@ -506,32 +496,19 @@ class RateLimiter(_Modes):
     def _free_rate(self, x):
         return (x["u"] - x["y"]) / self.params["T"]
 
-    def _up(self, t, x, xp):
-        d = self.params["R_up"] - self._free_rate(x)
-        return -d if self._mode(x) == "up" else d
-
-    def _down(self, t, x, xp):
-        d = self._free_rate(x) + self.params["R_down"]
-        return -d if self._mode(x) == "down" else d
-
-    def _toggle(self, which):
-        def action(t, x, xp):
-            x.modes["mode"] = "free" if self._mode(x) == which else which
-
-        return action
-
     def switches(self):
-        return [
-            Switch("up", self._up, -1, self._toggle("up"), "enter/leave dy/dt = R_up"),
-            Switch("down", self._down, -1, self._toggle("down"), "enter/leave dy/dt = -R_down"),
-        ]
+        P = self.params
+        return RATE_LIMITED.switches(
+            lambda t, x, xp: self._free_rate(x),
+            lambda t, x: -P["R_down"],
+            lambda t, x: P["R_up"],
+            names=("up", "down"),
+            docs=("enter/leave dy/dt = R_up", "enter/leave dy/dt = -R_down"),
+        )
 
     def init_discrete_state(self, t0, x, xp):
-        r, old = self._free_rate(x), self._mode(x)
         P = self.params
-        mode = "up" if r > P["R_up"] else "down" if r < -P["R_down"] else "free"
-        x.modes["mode"] = mode
-        return mode != old
+        return RATE_LIMITED.start(x.modes, self._free_rate(x), -P["R_down"], P["R_up"])
 
     def initial_guess(self, t0, x):
         y0 = self.params["y0"]

@@ -61,6 +61,10 @@ class Medium(ABC):
     #: True for media with a two-phase region (they implement
     #: :meth:`saturation_enthalpies` and :meth:`h_px`).
     condensable: bool = False
+    #: the critical point: temperature [K] and pressure [Pa] (nan for a medium
+    #: without a two-phase region; a condensable medium sets both)
+    T_critical: float = math.nan
+    p_critical: float = math.nan
 
     #: ``(get_medium, (fluid, backend))`` when the instance came from ``get_medium``
     #: (set there, so that this module need not import the registry): it then pickles
@@ -71,6 +75,12 @@ class Medium(ABC):
         if self.registry_call is not None:
             return self.registry_call
         return super().__reduce_ex__(protocol)
+
+    def __deepcopy__(self, memo):
+        """A medium copies as itself: one instance per fluid, shared with its cache
+        (``dnasim.compilation.compiler.own_components`` deep-copies the components of a
+        plant, and any medium one of them holds stays the shared one)."""
+        return self
 
     def __init__(self, name: str, backend: str, *, cache_size: int = 4096) -> None:
         self.name = name
@@ -294,6 +304,25 @@ class Medium(ABC):
         if not (-_INF < hv < _INF):
             raise PropertyError(self.label, pf, math.nan, "h_pQ", f"backend returned h = {hv}")
         return hv
+
+    @property
+    def critical_point(self) -> tuple[float, float]:
+        """(T_c [K], p_c [Pa]), the end of the saturation line; (nan, nan) for a medium
+        without a two-phase region."""
+        return self.T_critical, self.p_critical
+
+    def p_sat(self, T: float) -> float:
+        """The vapour pressure [Pa] at the temperature T [K]: the saturation pressure
+        below the critical temperature, the critical pressure at and above it (a
+        component asks for the flashing limit of a liquid: a control valve's choked
+        flow, a pump's NPSH). Only a condensable medium has one; the others raise
+        ``PropertyError`` naming the medium."""
+        self._no_two_phase_region("p_sat", T)
+
+    def _no_two_phase_region(self, prop: str, T: float):
+        raise PropertyError(
+            self.label, math.nan, math.nan, prop, "the medium has no two-phase region", T=T
+        )
 
     def cache_clear(self) -> None:
         """Empty the ``state`` and ``h_pT`` caches."""

@@ -40,6 +40,7 @@ from dnasim.media.state import FluidState
 _HP = CP.HmassP_INPUTS
 _PT = CP.PT_INPUTS
 _PQ = CP.PQ_INPUTS
+_QT = CP.QT_INPUTS
 _iDmass = CP.iDmass
 _iP = CP.iP
 _iHmass = CP.iHmass
@@ -238,6 +239,20 @@ class CoolPropMedium(Medium):
             self._refuse_saturated(p, T, Tsat)
         AS.update(_PT, p, T)
         return AS.hmass()
+
+    def p_sat(self, T: float) -> float:
+        """The vapour pressure [Pa] at T [K] by the backend's (Q = 0, T) flash; the
+        critical pressure at and above the critical temperature (``Medium.p_sat``)."""
+        if not self.condensable:
+            self._no_two_phase_region("p_sat", T)
+        if T >= self.T_critical:
+            return self.p_critical
+        AS = self._AS or self._abstract_state()
+        try:
+            AS.update(_QT, 0.0, T)
+            return float(AS.p())
+        except BACKEND_ERRORS as exc:
+            raise PropertyError(self.label, math.nan, math.nan, "p_sat", str(exc), T=T) from exc
 
     def _compute_h_pQ(self, p: float, x: float) -> float:
         AS = self._AS or self._abstract_state()

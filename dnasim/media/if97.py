@@ -262,6 +262,11 @@ class IF97Water(Medium):
         return hv
 
     # ---------------------------------------------------------- saturation
+    def p_sat(self, T: float) -> float:
+        """The vapour pressure [Pa] at T [K] (IF97 region 4), T capped at the critical
+        temperature (``Medium.p_sat``)."""
+        return float(K.p_sat(min(T, K.T_C)))
+
     def saturation_enthalpies(self, p):
         """(h', h'') [J/kg] at p [Pa] (arrays of the shape of p); NaN outside [611.213 Pa, p_c)."""
         p = np.asarray(p, dtype=float)
