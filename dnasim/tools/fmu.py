@@ -149,7 +149,9 @@ def _resolve_input(plant, ref: str):
 
 def _live(system, comp, p, t0, y, yp) -> bool:
     """Does a change of the parameter change the residual at (t0, y, yp)? (A parameter
-    precomputed in the component's setup does not: it cannot be an input.)"""
+    precomputed in the component's setup does not: it cannot be an input.) The System's
+    own copy of the component is changed (compile does not write into the plant)."""
+    comp = system.components[comp.name]
     orig = comp.params[p.name]
     v = float(comp.param_at(p.name, t0))
     try:
