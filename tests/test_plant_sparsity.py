@@ -190,6 +190,7 @@ PLANTS = {
     "signals": signals_plant,
     "turbine_condenser": lambda: plant_file("turbine_condenser.toml"),
     "pump_check_valve": lambda: plant_file("pump_trip_check_valve.toml"),
+    "motor_pump": lambda: plant_file("../../plants/feedpump_motor_trip.toml"),
     "drum_boiler": lambda: plant_file("../../plants/drum_boiler.toml"),
     "feedwater_heater": lambda: plant_file("../../plants/feedwater_heater.toml"),
 }

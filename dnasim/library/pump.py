@@ -391,7 +391,7 @@ class Pump(Component):
         ]
 
     def equations(self):
-        n = ("n",) if self.speed_from_signal else ()
+        n = self.speed_reads()
         nodes = ("inlet.p", "inlet.h", "outlet.p", "outlet.h")
         if self.casing:
             return self._casing_equations(n, nodes)
@@ -632,7 +632,7 @@ class Pump(Component):
         ]
 
     def _npsh_reads(self):
-        n = ("n",) if self.speed_from_signal else ()
+        n = self.speed_reads()
         extra = ("outlet.p", "outlet.h") + (("h_2",) if self.casing else ())
         return ("m", "inlet.p", "inlet.h") + extra + n
 
@@ -654,6 +654,11 @@ class Pump(Component):
         return False
 
     # --------------------------------------------------------------- physics
+    def speed_reads(self) -> tuple[str, ...]:
+        """The local names the relative speed is read from: ("n",) for the signal
+        input, () for the parameter (a subclass with a speed state: its own)."""
+        return ("n",) if self.speed_from_signal else ()
+
     def speed(self, t, x):
         """Relative speed r = n/n_0 [-]."""
         return x["n"] if self.speed_from_signal else self.param_at("speed", t)
