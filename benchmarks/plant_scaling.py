@@ -148,6 +148,7 @@ def run(n, solver, rtol=1e-6, linsolver=None, geometry=False):
                 rtol=rtol,
                 atol=dae.atol_vector(1e-6, y0),
                 jac_sparsity=dae.jac_sparsity,
+                residual_for_columns=dae.residual_for_columns,
                 tstops=dae.tstops(0.0, T_END),
                 calc_initial=False,
                 # as `dnasim run` (backends.NordsieckBDF): algebraic variables out of the

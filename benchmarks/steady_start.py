@@ -41,7 +41,10 @@ def scaled_residual(system, t0, y, yp, fixed) -> float:
 
     f = system.residual(t0, y, yp)
     matrix = IterationMatrix(
-        system.residual, system.n, sparsity=sp.csc_matrix(system.pattern_y + system.pattern_yp)
+        system.residual,
+        system.n,
+        sparsity=sp.csc_matrix(system.pattern_y + system.pattern_yp),
+        residual_for_columns=system.residual_for_columns,
     )
     scale = np.maximum(system.nominal, np.abs(y))
     inc = 1e-7 * scale

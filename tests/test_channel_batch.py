@@ -113,7 +113,12 @@ def test_batched_partial_jacobian_equals_whole_evaluations_of_each_pipe():
     inc = (y + np.maximum(SQRT_EPS * np.abs(y), 1e-3)) - y
     matrices = []
     for system, partial in ((batched, True), (alone, False)):
-        m = IterationMatrix(system.residual, system.n, sparsity=system.jac_sparsity)
+        m = IterationMatrix(
+            system.residual,
+            system.n,
+            sparsity=system.jac_sparsity,
+            residual_for_columns=system.residual_for_columns,
+        )
         if not partial:
             m._group_residuals = [None] * len(m.groups)
         f0 = system.residual(0.0, y, yp)
@@ -123,7 +128,10 @@ def test_batched_partial_jacobian_equals_whole_evaluations_of_each_pipe():
     sub = [
         len(u.names)
         for cols in IterationMatrix(
-            batched.residual, batched.n, sparsity=batched.jac_sparsity
+            batched.residual,
+            batched.n,
+            sparsity=batched.jac_sparsity,
+            residual_for_columns=batched.residual_for_columns,
         ).groups
         for u in evaluation_units([b for b in batched.blocks if np.isin(b.gidx, cols).any()])
         if hasattr(u, "names")

@@ -49,7 +49,12 @@ def _increments(y):
 def test_partial_group_evaluation_gives_the_same_jacobian(name):
     system, y0, yp0 = _plant(name)
     y, yp = _off_steady(system, y0, yp0)
-    matrix = IterationMatrix(system.residual, system.n, sparsity=system.jac_sparsity)
+    matrix = IterationMatrix(
+        system.residual,
+        system.n,
+        sparsity=system.jac_sparsity,
+        residual_for_columns=system.residual_for_columns,
+    )
     assert all(g is not None for g in matrix._group_residuals)
     f0 = system.residual(0.0, y, yp)
     inc = _increments(y)
@@ -62,6 +67,19 @@ def test_partial_group_evaluation_gives_the_same_jacobian(name):
     # to the bit: the same rows evaluated from the same inputs (module doc)
     assert np.array_equal(partial.data, whole.data)
     assert np.count_nonzero(whole.data) > whole.nnz // 2  # a matrix, not zeros
+
+
+def test_the_partial_channel_is_only_what_the_caller_gives():
+    """The solver sees a residual, a pattern and switches, and the partial-residual
+    channel only when the caller passes it (issue 21): a System's bound residual alone
+    gives whole evaluations, however the residual is wrapped."""
+    system, y0, yp0 = _plant("attemperator")
+    matrix = IterationMatrix(system.residual, system.n, sparsity=system.jac_sparsity)
+    assert all(g is None for g in matrix._group_residuals)
+    from dnasim.run.simulation import problem_for
+
+    pb = problem_for(system, 0.0, 1.0, y0, yp0, 1e-6)
+    assert pb.residual_for_columns == system.residual_for_columns
 
 
 def test_partial_evaluation_skips_untouched_components():
@@ -88,7 +106,12 @@ def test_partial_evaluation_skips_untouched_components():
 def test_coloured_jacobian_equals_column_by_column():
     system, y0, yp0 = _plant("attemperator")
     y, yp = _off_steady(system, y0, yp0)
-    matrix = IterationMatrix(system.residual, system.n, sparsity=system.jac_sparsity)
+    matrix = IterationMatrix(
+        system.residual,
+        system.n,
+        sparsity=system.jac_sparsity,
+        residual_for_columns=system.residual_for_columns,
+    )
     f0 = system.residual(0.0, y, yp)
     inc = _increments(y)
     cj = 37.0

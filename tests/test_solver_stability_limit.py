@@ -7,27 +7,30 @@ order 3 takes 0.13 s steps (benchmarks/README.md, "Stability-limit detection").
 """
 
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from dnasim.plant.plantfile import load
-from dnasim.solver import bdf
+from dnasim.solver import controller
+from dnasim.solver.controller import StepController
 
 ROOT = Path(__file__).resolve().parent.parent
-TARGET = bdf.ERROR_TARGET
+TARGET = controller.ERROR_TARGET
 
 
 def _controller(h=1e-3):
-    return SimpleNamespace(h=h, flat_steps=0, flat_h=h, stability_h={})
+    c = StepController(max_order=5)
+    c.restart(h)
+    c.h = h  # the step size the detector is fed (``_feed``)
+    return c
 
 
 def _feed(c, q, estimates, steps, h_factor=1.0):
     """Call the detector `steps` times with (error, err_down, err_up); True once it fires."""
     fired = []
     for _ in range(steps):
-        fired.append(bdf.NordsieckBDF._stability_limited(c, q, *estimates))
+        fired.append(c.stability_limited(q, c.h, *estimates))
         c.h *= h_factor
     return fired
 
@@ -67,7 +70,7 @@ def test_orders_below_four_are_left_alone():
 
 def _pipe_run(monkeypatch, detect: bool):
     if not detect:
-        monkeypatch.setattr(bdf, "MIN_Q_STAB", 99)
+        monkeypatch.setattr(controller, "MIN_Q_STAB", 99)
     plant = load(ROOT / "tests" / "field" / "long_pipe_step.toml")
     res = plant.simulate()
     assert res.success, res.message

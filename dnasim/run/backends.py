@@ -57,6 +57,9 @@ class Problem:
     #: mask of the quadratures (running integrals read by no equation,
     #: ``System.quadrature``): out of the error test and Newton's norm; None: none
     quadrature: np.ndarray | None = None
+    #: the partial-residual channel, residual_for_columns(cols) -> F_cols(t, y, yp, f0)
+    #: (``System.residual_for_columns``; ``solve_dae``'s keyword); None: none
+    residual_for_columns: object = None
 
 
 @dataclass
@@ -94,6 +97,7 @@ class NordsieckBDF:
                 algebraic=pb.algebraic,
                 quadrature=pb.quadrature,
                 jac_sparsity=pb.jac_sparsity,
+                residual_for_columns=pb.residual_for_columns,
                 calc_initial=False,
                 variable_names=pb.variable_names,
                 equation_names=pb.equation_names,

@@ -198,6 +198,7 @@ def problem_for(system, t0, t_end, y0, yp0, atol_scaled, **options) -> Problem:
         yp0=yp0,
         algebraic=system.algebraic,
         jac_sparsity=system.jac_sparsity,
+        residual_for_columns=system.residual_for_columns,
         events=system.events,
         tstops=system.tstops(t0, t_end),
         atol=system.atol_vector(atol_scaled, y0),

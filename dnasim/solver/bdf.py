@@ -13,55 +13,49 @@ Its ``step`` advances the solution by one accepted step:
    for k = q - 1, q, q + 1 (d the error estimate of order k, c a safety factor),
    after q + 1 steps at constant h; on rejection shrink h (and the order).
 
-It knows nothing of events, output or stop times: the driver (``solve_dae``)
-handles those. The method is the fixed-coefficient ("interpolation") form of
-Gear's Nordsieck BDF as in LSODE; see ``nordsieck.py`` for the algebra.
+The corrector (2) is ``newton.NewtonCorrector``'s, the choice of h and q (4) is
+``controller.StepController``'s: the stepper feeds it the error estimates and
+applies its answer to the Nordsieck array. It knows nothing of events, output or
+stop times: the driver (``driver.Driver``) handles those. The method is the
+fixed-coefficient ("interpolation") form of Gear's Nordsieck BDF as in LSODE; see
+``nordsieck.py`` for the algebra.
 """
 
 from __future__ import annotations
 
 import math
 import sys
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from dnasim.core.errors import DAEError, ResidualDomainError
+from dnasim.core.errors import DAEError
 from dnasim.solver import nordsieck as nd
-from dnasim.solver.callbacks import user_error
-from dnasim.solver.linear_algebra import IterationMatrix, SingularMatrixError
+from dnasim.solver.controller import ERROR_TARGET, StepController  # noqa: F401 (re-exported)
+from dnasim.solver.controller import eta as _eta
+from dnasim.solver.linear_algebra import IterationMatrix
+from dnasim.solver.newton import (  # noqa: F401 (re-exported: bdf.NEWTON_TOL, ...)
+    CJ_RATIO_REFRESH,
+    FULL_NEWTON_ITERS,
+    FULL_NEWTON_RATE_UPDATE,
+    NEWTON_MAX_ITERS,
+    NEWTON_RATE_MAX,
+    NEWTON_TOL,
+    NewtonCorrector,
+)
+from dnasim.solver.residual import (  # noqa: F401 (re-exported)
+    CountedResidual,
+    SolverStats,
+    StepFailure,
+    _largest,
+    all_finite,
+)
 
 EPS = float(np.finfo(float).eps)
 
-NEWTON_MAX_ITERS = 4  # IDA's maxcor
-FULL_NEWTON_ITERS = 8  # full Newton after a fresh matrix failed by its count (see _correct)
-# full Newton judges convergence by its observed rate once an update is below this
-# fraction of the tolerance (see _full_newton)
-FULL_NEWTON_RATE_UPDATE = 0.1
-NEWTON_RATE_MAX = 0.9  # IDA's RATEMAX: give up when the contraction is slower
-NEWTON_TOL = 0.03  # Newton converged at 0.03 of the error test (IDA: 0.33), see _choose_next
-# refresh J when cj/cj_J leaves [0.25, 4]. IDA's window is narrower: [0.6, 1.67]
-# ((1 - XRATE)/(1 + XRATE) with XRATE = 0.25). With IDA's window the Test Set of
-# benchmarks/solver_vs_peers.py took 2.0 to 2.2 Newton iterations a step instead of 2.3
-# to 2.8, for 1.7 to 2 times the Jacobians, no less CPU time, and 5 of 12 rows below
-# IDA's digits (Robertson at 1e-4: -0.36; measured, benchmarks/README.md).
-CJ_RATIO_REFRESH = 0.25
 MAX_NEWTON_FAILURES = 10
 MAX_ERROR_FAILURES = 10
-ETA_MAX_FIRST = 1.0e4 / 10.0  # growth allowed right after the (tiny) initial step
-ERROR_TARGET = 0.03  # the step-size formula aims at 0.03 of the tolerance (IDA: 0.5), see README
 REINIT_AFTER_FAILURES = 3  # failed attempts in one step before the point is made consistent
 REINIT_STEP_RATIO = 0.01  # ... when h has also fallen below 0.01 of the last step's
-CROSSING_OVERSHOOT = 1.1  # a failed step crossing a switch ends 10 % past the crossing
-ORDER_UP_BIAS = 1.2  # a higher order must promise 20 % more step to be chosen
-# Stability-limit detection (see _stability_limited): at order q >= MIN_Q_STAB, error
-# estimates that do not fall with the order (each at least FLAT_RATIO of the next lower
-# order's) at a step limited by its error and held within 20 % of one size for
-# FLAT_STEPS_PER_ORDER (q + 1) steps mean the step is held by the method's stability
-# region, not by the solution: the order drops by one.
-FLAT_RATIO = 0.5
-FLAT_STEPS_PER_ORDER = 2
-MIN_Q_STAB = 4  # orders below are left alone: see _stability_limited
 # restart step from the solution (True) or IDA's rule (False, the default), see restart_step
 RESTART_FROM_SOLUTION = False
 RESTART_JUMP_FACTOR = 10.0  # ... but at most 10 times IDA's rule, see restart_step
@@ -82,78 +76,7 @@ _compiled_wrms = [None]
 _runs = [0, None]
 
 
-@dataclass
-class SolverStats:
-    """Work counters, named as in the IDA/DASSL literature."""
-
-    steps: int = 0
-    rejected_error: int = 0
-    rejected_newton: int = 0
-    residual_evals: int = 0
-    jac_evals: int = 0
-    lu_decomps: int = 0
-    newton_iters: int = 0
-    full_newton_iters: int = 0
-    reinitializations: int = 0
-
-    def as_dict(self) -> dict:
-        return dict(self.__dict__)
-
-
-@dataclass
-class StepFailure:
-    """Why the last attempt failed (used in the final error message)."""
-
-    reason: str = ""
-    bad_components: list = field(default_factory=list)
-
-
-class CountedResidual:
-    """Wraps the user's residual: counts calls, checks the returned shape."""
-
-    def __init__(self, residual, n, stats: SolverStats):
-        self.residual = residual
-        self.n = n
-        self.shape = (n,)
-        self.stats = stats
-
-    def __call__(self, t, y, yp):
-        self.stats.residual_evals += 1
-        try:  # call_user inlined: this is the hot path of small problems
-            f = self.residual(t, y, yp)
-        except (ResidualDomainError, DAEError):
-            raise
-        except Exception as exc:
-            raise user_error("the residual", t, exc) from exc
-        if not (type(f) is np.ndarray and f.dtype.kind == "f"):
-            f = _as_float_array(f, t)
-        if f.shape != self.shape:
-            raise DAEError(
-                f"residual(t, y, yp) returned an array of shape {f.shape}; it must return "
-                f"shape ({self.n},), one equation per unknown."
-            )
-        return f
-
-
-def _as_float_array(f, t) -> np.ndarray:
-    """The residual's value as floats; strings, None or complex numbers are an error."""
-    arr = np.asarray(f)
-    if arr.dtype.kind not in "biuf":
-        raise DAEError(
-            f"residual(t, y, yp) returned {_describe(f)} at t = {float(t):.10g}; it must "
-            "return an array of real numbers."
-        )
-    return arr.astype(float)
-
-
-def _describe(f) -> str:
-    arr = np.asarray(f)
-    kinds = {"U": "strings", "S": "bytes", "O": "objects", "c": "complex numbers"}
-    what = kinds.get(arr.dtype.kind, f"values of type {arr.dtype}")
-    return f"{what} ({str(f)[:60]!r})"
-
-
-class NordsieckBDF:
+class NordsieckBDF(NewtonCorrector):
     """The BDF integrator's state and its single-step method.
 
     Parameters
@@ -172,6 +95,21 @@ class NordsieckBDF:
         last attempt starts them at their last accepted values (``_last_chance``)
     matrix : IterationMatrix
     fixed_order, fixed_step : for order-verification tests only: keep q and h constant
+    reinitialize : optional hook reinitialize(t, y, yp, h) -> consistent (y, yp) at t,
+        the differential y kept (the driver's), used after repeated failures in one
+        step (``_reinitialize``)
+    track_algebraic_correction : keep ``algebraic_correction``, the largest correction
+        |y_n - y_pred| of an algebraic component in the last step in units of its
+        tolerance (the driver's output re-solves the algebraic variables between steps
+        when it exceeds 1, ``driver.Driver.refine``)
+    predicted_crossing : optional hook predicted_crossing(stepper, t_a, t_b) -> the
+        earliest time in (t_a, t_b] at which a restart switch changes sign on the
+        predictor polynomial (``stepper.interpolate`` beyond stepper.t), or None; a
+        Newton failure then shortens the step to end just past it
+        (``StepController.after_newton_failure``)
+
+    The step-size and order decisions are ``self.controller``'s (``StepController``),
+    fed with the error estimates of each step.
     """
 
     def __init__(
@@ -196,6 +134,9 @@ class NordsieckBDF:
         fixed_step: bool = False,
         norm_mask: np.ndarray | None = None,
         algebraic: np.ndarray | None = None,
+        reinitialize=None,
+        predicted_crossing=None,
+        track_algebraic_correction: bool = False,
     ):
         self.residual = residual
         self.n = y0.size
@@ -242,14 +183,15 @@ class NordsieckBDF:
         self._f_nonfinite = False  # the last _newton met a non-finite predictor residual
         self.jacobian_current = False
         self.failure = StepFailure()
-        # predicted_crossing(t_a, t_b) -> the earliest crossing time of a restart switch
-        # on the predictor polynomial in (t_a, t_b], or None (set by the driver)
-        self.predicted_crossing = None
-        # reinitialize(t, y, yp, h) -> consistent (y, yp) at t (set by the driver)
-        self.reinitialize = None
-        # order -> the step size [s] at which that order was found stability-limited;
-        # kept across restarts (the plant's fast modes stay), see _stability_limited
-        self.stability_h: dict[int, float] = {}
+        self.predicted_crossing = predicted_crossing  # hooks: see the class doc
+        self.reinitialize = reinitialize
+        self.controller = StepController(max_order, fixed_order, fixed_step)
+        # max_i |y_n - y_pred|_i w_i over the algebraic components of the last step (the
+        # driver's output reads it, ``track_algebraic_correction``); inf: not tracked
+        self.algebraic_correction = math.inf
+        self._track = None
+        if track_algebraic_correction and self.algebraic is not None and self.algebraic.any():
+            self._track = np.flatnonzero(self.algebraic)
         self.restart(t0, y0, yp0, h0)
 
     # -- starting and restarting -----------------------------------------------------------
@@ -286,10 +228,8 @@ class NordsieckBDF:
         self.y = np.array(y, dtype=float)
         self.yp = np.array(yp, dtype=float)
         self.delta_prev = None
-        self.steps_at_this_order = 0
-        self.first_step = True
         self.h_used, self.q_used = self.h, 1
-        self.flat_steps, self.flat_h = 0, self.h
+        self.controller.restart(self.h)
 
     def restart_step(self, t: float, y_new, yp_new, t_next_stop: float) -> float:
         """The first step size after a restart at self.t (a tstop or a located switch).
@@ -349,7 +289,7 @@ class NordsieckBDF:
         self.h = h
         self.z[:] = 0.0
         self.z[: q + 1] = z
-        self.first_step = False
+        self.controller.first_step = False
 
     # -- norms -----------------------------------------------------------------------------
     def weights_for(self, y) -> np.ndarray:
@@ -422,7 +362,6 @@ class NordsieckBDF:
                     raise DAEError(self._failure_message(t_new, h, "Newton failed to converge"))
                 if self.fixed_step:
                     raise DAEError(self._failure_message(t_new, h, "Newton failed (fixed step)"))
-                self.steps_at_this_order = 0
                 self._change_step(self._eta_after_newton_failure(t_new, h))
                 continue
             if self._dot_ok:  # Delta and its norm in one compiled call, the same numbers
@@ -444,6 +383,9 @@ class NordsieckBDF:
                     )
                 self._after_error_failure(error, n_error_fail)
                 continue
+            if self._track is not None:
+                a = self._track
+                self.algebraic_correction = float(np.max(np.abs(delta[a]) * weights[a]))
             self._accept(t_new, z_pred, delta, y, yp)
             self.h_used, self.q_used = h, q
             self._choose_next(error, delta, error_weights, failed_this_step)
@@ -489,34 +431,18 @@ class NordsieckBDF:
         except DAEError:
             return  # not better than the accepted point: go on with the step cuts
         self.restart(self.t, y, yp, h)
-        self.first_step = False  # no fast growth: h was cut for a reason
+        self.controller.first_step = False  # no fast growth: h was cut for a reason
         self.jacobian_current = False
         self.matrix.matrix = None
         self.stats.reinitializations += 1
 
     def _eta_after_newton_failure(self, t_new: float, h: float) -> float:
-        """Step ratio after a Newton failure: 0.25, or less to end just past a switch.
-
-        A phase line is a kink of the residual: the Newton of a step whose predictor
-        carries a volume across it starts on one piece and must converge on the
-        other, and the step size was cut by 4 again and again while the crossing
-        stayed inside the step. When the predictor polynomial (the last accepted
-        step's interpolant, extrapolated) crosses a restart switch in the step, the
-        step is shortened to end a little (CROSSING_OVERSHOOT) past the earliest
-        predicted crossing: only that crossing is left in the step, the predictor at
-        its end lies on the new side with the solution, and the finite-difference
-        matrix is built there. The driver then locates the crossing on the accepted
-        step and restarts at order 1 (seed sec. 10.2.1).
-        """
-        eta = 0.25
-        if self.predicted_crossing is None or self.fixed_step:
-            return eta
-        t_c = self.predicted_crossing(self.t, t_new)
-        if t_c is not None:
-            eta_c = CROSSING_OVERSHOOT * (t_c - self.t) / h
-            if 0.0 < eta_c < 0.9:
-                eta = min(max(eta_c, 1e-3), 0.9)
-        return eta
+        """Step ratio after a Newton failure (``StepController.after_newton_failure``),
+        with the restart switches' crossing predicted in the step when there is a hook."""
+        t_c = None
+        if self.predicted_crossing is not None and not self.fixed_step:
+            t_c = self.predicted_crossing(self, self.t, t_new)
+        return self.controller.after_newton_failure(self.t, h, t_c)
 
     def _step_size_failure(self, h, t_new) -> None:
         raise DAEError(
@@ -535,272 +461,8 @@ class NordsieckBDF:
         self.y = y
         self.yp = yp
         self.stats.steps += 1
-        self.steps_at_this_order += 1
+        self.controller.accepted()
         self.jacobian_current = False
-
-    # -- the corrector ---------------------------------------------------------------------
-    def _correct(self, t, z_pred, cj, h, weights, newton_weights, yp_pred=None):
-        """Modified Newton for the corrector; returns (converged, y, yp).
-
-        ``weights``: the error weights of every component (the finite-difference
-        increments); ``newton_weights``: those of the convergence norm (0 for the
-        quadratures: their Newton error is h times the error of the integrand, which
-        the others' convergence bounds; nothing reads them back).
-
-        Attempts: the kept matrix; a fresh one; and, when that still converges too
-        slowly but does converge, full Newton (a fresh matrix every iteration, at most
-        FULL_NEWTON_ITERS). The last is for correctors whose algebraic unknowns the
-        predictor misses by far on a curved constraint: the flow between a liquid and a
-        boiling volume, fixed by pressures that move by 1e9 Pa per kg of the volumes'
-        masses, was predicted 3 kg/s off on tests/field/boiling_10bar.toml, and modified
-        Newton needed more than 4 iterations where full Newton needed 5 (measured).
-
-        When all of these fail, one more attempt starts the algebraic unknowns at
-        their last accepted values instead of the predictor's (``_last_chance``).
-        ``yp_pred``: z_pred[1] / h when already computed."""
-        y_pred = z_pred[0]
-        if yp_pred is None:
-            yp_pred = z_pred[1] / h
-        result = self._correct_from_predictor(t, y_pred, yp_pred, cj, h, weights, newton_weights)
-        if result[0] or self.algebraic is None or not self.algebraic.any():
-            return result
-        return self._last_chance(t, y_pred, yp_pred, cj, h, weights, newton_weights)
-
-    def _correct_from_predictor(self, t, y_pred, yp_pred, cj, h, weights, newton_weights):
-        """The attempts of ``_correct`` that start at the predictor."""
-        for attempt in range(2):
-            y = y_pred.copy()
-            yp = yp_pred.copy()
-            try:
-                f = self.residual(t, y, yp)
-                refresh = (
-                    self.matrix.matrix is None
-                    or not (CJ_RATIO_REFRESH < cj / self.matrix.cj < 1.0 / CJ_RATIO_REFRESH)
-                    or (attempt == 1)
-                )
-                if refresh:
-                    if not all_finite(f):
-                        self._note_nonfinite(t, f)
-                        return False, None, None
-                    self._new_matrix(t, y, yp, f, cj, h, weights)
-                # with the kept matrix a non-finite f shows in the first update (_newton)
-                converged, y, yp = self._newton(t, y, yp, f, cj, newton_weights, fresh=refresh)
-                if self._f_nonfinite:
-                    return False, None, None
-            except ResidualDomainError as exc:
-                self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
-                converged = False
-                if self.jacobian_current:
-                    return False, None, None
-                self.jacobian_current = False
-                continue
-            if converged:
-                return True, y, yp
-            if self.jacobian_current:
-                if self._slow_but_converging:
-                    return self._full_newton_from(
-                        t, y_pred, yp_pred, cj, h, weights, newton_weights
-                    )
-                return False, None, None
-            # Slow or failed with an old matrix: retry once with a fresh one.
-        return False, None, None
-
-    def _last_chance(self, t, y_pred, yp_pred, cj, h, weights, newton_weights):
-        """The corrector from the predictor with the algebraic unknowns at their last
-        accepted values (y' moved with them along the BDF formula y' = y'_pred + cj
-        (y - y_pred)): a fresh matrix, and full Newton when that converges too slowly.
-
-        Their Nordsieck history is not error-controlled (outside the error test of
-        plants) and carries the Newton and truncation noise of the states they follow
-        with a large gain: an economiser's liquid flows, fixed by volume pressures that
-        move 1.6e9 Pa per unit relative mass, were extrapolated at order 4 to -84 kg/s
-        where the corrector's flow was 7.7 kg/s (plants/rankine.toml, t = 2 ms), and
-        with dp = c m |m| full Newton from there halves m per iteration and fails.
-        The last accepted value was 15 kg/s. Any start is valid: an algebraic y_i
-        enters F only through y_i. plants/rankine.toml at 11 values of rtol from 0.9e-6
-        to 1.1e-6, first 100 steps: without this attempt 6 runs crawled at h ~ 1e-5 s
-        below t = 5 ms (main too, at 0.98e-6); with it all reached 0.40 to 0.64 s
-        (measured). Only after the attempts from the predictor failed: as the first
-        retry (instead of the predictor's start for the fresh matrix and full Newton) it
-        took tests/field/boiling_10bar.toml into a step-size collapse at 36.4 s, where
-        the predictor carries the volumes across the phase line and the last values lie
-        on the other side (measured)."""
-        a = self.algebraic
-        y, yp = y_pred.copy(), yp_pred.copy()
-        yp[a] += cj * (self.y[a] - y[a])
-        y[a] = self.y[a]
-        y_start, yp_start = y, yp
-        try:
-            f = self.residual(t, y, yp)
-            if not all_finite(f):
-                self._note_nonfinite(t, f)
-                return False, None, None
-            self._new_matrix(t, y, yp, f, cj, h, weights)
-            converged, y, yp = self._newton(t, y, yp, f, cj, newton_weights, fresh=True)
-        except ResidualDomainError as exc:
-            self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
-            return False, None, None
-        if converged:
-            return True, y, yp
-        if self._slow_but_converging:
-            return self._full_newton_from(t, y_start, yp_start, cj, h, weights, newton_weights)
-        return False, None, None
-
-    def _full_newton_from(self, t, y_start, yp_start, cj, h, weights, newton_weights):
-        """``_full_newton`` from (y_start, yp_start): (converged, y, yp)."""
-        try:
-            y, yp = y_start.copy(), yp_start.copy()
-            f = self.residual(t, y, yp)
-            converged, y, yp = self._full_newton(t, y, yp, f, cj, h, weights, newton_weights)
-        except ResidualDomainError as exc:
-            self.failure = StepFailure(f"the residual could not be evaluated: {exc}")
-            return False, None, None
-        if converged:
-            return True, y, yp
-        return False, None, None
-
-    def _full_newton(self, t, y, yp, f, cj, h, weights, newton_weights):
-        """Newton with a fresh matrix every iteration (see ``_correct``)."""
-        previous = math.inf
-        for _ in range(FULL_NEWTON_ITERS):
-            self._new_matrix(t, y, yp, f, cj, h, weights)
-            self.stats.full_newton_iters += 1
-            converged, y, yp = self._newton(
-                t, y, yp, f, cj, newton_weights, fresh=True, max_iters=1
-            )
-            if converged:
-                return True, y, yp
-            dnorm = self._last_dnorm
-            if not self._slow_but_converging or not dnorm < previous:
-                return False, y, yp  # not finite, or diverging
-            # Each iteration above is judged with IDA's initial rate guess (newton_ss =
-            # 20, the matrix being fresh). Once the update is small, the rate observed
-            # between the last two updates is known: the DASSL/IDA test with it. (Not
-            # while the update is large: a quadratic start makes the ratio tiny, 424 after
-            # 6e6 on plants/rankine.toml, and says nothing of what is left.)
-            rate = dnorm / previous
-            if dnorm <= FULL_NEWTON_RATE_UPDATE and rate / (1.0 - rate) * dnorm <= NEWTON_TOL:
-                return True, y, yp
-            previous = dnorm
-            f = self.residual(t, y, yp)
-            if not all_finite(f):
-                self._note_nonfinite(t, f)
-                return False, y, yp
-        self.failure = StepFailure(
-            f"full Newton did not converge in {FULL_NEWTON_ITERS} iterations"
-        )
-        return False, y, yp
-
-    def _new_matrix(self, t, y, yp, f, cj, h, weights) -> None:
-        self.matrix.evaluate(t, y, yp, f, cj, h, weights)
-        self.stats.jac_evals += 1
-        self.stats.lu_decomps += 1
-        try:
-            self.matrix.factorize()
-        except SingularMatrixError as exc:
-            if self.matrix.nonfinite:
-                # A predicted state outside the residual's domain (a square root of a
-                # slightly negative value, say): recoverable by a smaller step.
-                raise ResidualDomainError(str(exc)) from None
-            raise DAEError(f"At t = {t:.10g}: {exc}") from None
-        self.jacobian_current = True
-        self.newton_ss = 20.0
-
-    def _newton(self, t, y, yp, f, cj, weights, fresh=False, max_iters=NEWTON_MAX_ITERS):
-        """Iterate y <- y - J^{-1} F with the DASSL/IDA rate test; returns (converged, y, yp)."""
-        ratio = cj / self.matrix.cj
-        scale = 2.0 / (1.0 + ratio) if ratio != 1.0 else 1.0
-        # A matrix built for another cj contracts at best by |1 - r| / (1 + r) (the
-        # dF/dy'-dominated limit); the stale rate from earlier steps must not claim better.
-        c = abs(1.0 - ratio) / (1.0 + ratio)
-        self.newton_ss = max(self.newton_ss, c / (1.0 - c))
-        first_norm = None
-        self._slow_but_converging = False
-        self._f_nonfinite = False
-        kernels = self._kernels
-        lu = self.matrix.dense_lu() if self._small_dense else None
-        for m in range(max_iters):
-            self.stats.newton_iters += 1
-            if kernels is not None:  # the same numbers in one compiled loop
-                y_new, yp_new, dw = np.empty(self.n), np.empty(self.n), self._dw
-                if lu is not None:  # the dense LU solve in the loop too
-                    ss = kernels.newton_update_lu(
-                        lu[0], lu[1], f, scale, y, yp, cj, weights, y_new, yp_new, dw
-                    )
-                else:
-                    ss = kernels.newton_update(
-                        self.matrix.solve(f), scale, y, yp, cj, weights, y_new, yp_new, dw
-                    )
-                y, yp = y_new, yp_new
-                if not self._dot_ok:
-                    ss = dw.dot(dw)
-            else:
-                d = self.matrix.solve(-f)
-                if scale != 1.0:
-                    d *= scale
-                y = y + d
-                yp = yp + cj * d
-                dw = d * weights
-                ss = dw.dot(dw)
-            dnorm = math.sqrt(ss / dw.size)  # self.norm(d, weights), inlined
-            self._last_dnorm = dnorm
-            if not math.isfinite(dnorm):
-                # A NaN or inf in f makes the update non-finite (every x_i of the LU
-                # solve involves b_i; 0 * inf is NaN): the residuals of the iterations
-                # are checked here, not after each evaluation (0.6 us a call, measured).
-                if not all_finite(f):
-                    self._note_nonfinite(t, f)
-                    self._f_nonfinite = m == 0  # the predictor's: no retry (``_correct``)
-                else:
-                    self.failure = StepFailure("the Newton update is not finite")
-                return False, y, yp
-            if m == 0:
-                first_norm = dnorm
-                if dnorm <= 1.0e-4 * NEWTON_TOL:
-                    return True, y, yp
-            else:
-                rate = (dnorm / first_norm) ** (1.0 / m) if first_norm > 0 else 0.0
-                if rate > NEWTON_RATE_MAX:
-                    self.failure = StepFailure(
-                        f"Newton converged too slowly (rate {rate:.2f})", _largest(dw)
-                    )
-                    return False, y, yp
-                self.newton_ss = rate / (1.0 - rate)
-            # With a matrix not built for this corrector (kept from earlier steps, or from
-            # an attempt at another h), the rate estimate is stale: never accept after the
-            # first iteration. On DAEs whose constraints amplify errors (a transistor
-            # amplifier: gain ~100 from one node to the next) a stale rate accepted
-            # leftovers far above the tolerance, and the next step could not pass the
-            # error test at any h. Near a phase line the matrix of a failed attempt may
-            # even belong to the other side of the kink (boiling_60bar: a leftover of
-            # 0.9 Pa between two liquid volumes, 0.007 kg/s in their flow, accepted).
-            # Measured again (sv11): accepting after one update where this matrix's
-            # rate was measured on an earlier step (IDA's ss carried over) cut the Test
-            # Set's iterations from 2.3-2.8 to 2.0-2.6 a step, and the transistor
-            # amplifier at rtol 1e-4 stopped at t = 0.054 (error test failing at h = 3e-10).
-            if self.newton_ss * dnorm <= NEWTON_TOL and (m > 0 or fresh):
-                return True, y, yp
-            if m + 1 < max_iters:
-                f = self.residual(t, y, yp)  # its finiteness: see the update's above
-        self.failure = StepFailure(
-            f"Newton did not converge in {max_iters} iterations", _largest(dw)
-        )
-        # converging, only not fast enough: full Newton may finish it (``_correct``)
-        self._slow_but_converging = (
-            fresh and first_norm is not None and (m == 0 or dnorm < first_norm)
-        )
-        return False, y, yp
-
-    def _note_nonfinite(self, t, f) -> None:
-        bad = np.flatnonzero(~np.isfinite(f)).tolist()
-        self.failure = StepFailure(
-            f"the residual returned NaN or inf at t = {t:.10g} in equation(s) "
-            + ", ".join(
-                str(self.equation_names[i]) if self.equation_names is not None else str(i)
-                for i in bad[:8]
-            ),
-            bad,
-        )
 
     # -- step-size and order control -------------------------------------------------------
     def _change_step(self, eta: float) -> None:
@@ -812,60 +474,40 @@ class NordsieckBDF:
             # order-raise estimate (Delta - Delta_prev) stays valid across h changes.
             self.delta_prev *= eta ** (self.q + 1)  # in place: no one else holds it
 
+    def _set_order(self, new_q: int, delta=None) -> None:
+        """Raise (with this step's Delta) or lower the order of the Nordsieck array."""
+        while self.q > new_q:
+            nd.decrease_order(self.z, self.q)
+            self.q -= 1
+            self.delta_prev = None
+        if new_q == self.q + 1:
+            nd.increase_order(self.z, self.q, delta)
+            self.q = new_q
+            self.delta_prev = None
+
     def _after_error_failure(self, error: float, n_fail: int) -> None:
         q = self.q
-        self.steps_at_this_order = 0
-        if n_fail >= 3:
-            while self.q > 1 and not self.fixed_order:
-                nd.decrease_order(self.z, self.q)
-                self.q -= 1
-                self.delta_prev = None
-            self._change_step(0.25)
-            return
-        eta = _eta(error, q)
-        if q > 1 and not self.fixed_order:
-            err_down = nd.lower_order_error_coefficient(q) * self.norm(
-                self.z[q], self.weights_for(self.y) * self.error_mask
-            )
-            eta_down = _eta(err_down, q - 1)
-            if eta_down > eta:
-                nd.decrease_order(self.z, q)
-                self.q -= 1
-                self.delta_prev = None
-                eta = eta_down
-        eta = min(max(eta, 0.1), 0.9)
-        if n_fail == 2:
-            eta = min(eta, 0.25)
+        new_q, eta = self.controller.after_error_failure(
+            q,
+            error,
+            n_fail,
+            lambda: (
+                nd.lower_order_error_coefficient(q)
+                * self.norm(self.z[q], self.weights_for(self.y) * self.error_mask)
+            ),
+        )
+        self._set_order(new_q)
         self._change_step(eta)
 
     def _choose_next(self, error, delta, error_weights, failed_this_step) -> None:
-        """After an accepted step: the next step size and order.
-
-        eta_k = (err_k / ERROR_TARGET)^(-1/(k+1)) for the orders k = q - 1, q, q + 1
-        (the lower and higher ones only after q + 1 steps at this order, so the
-        differences they need exist). The chosen eta goes through the smooth limiter
-        eta <- 1 + atan(eta - 1) (Soderlind's, kappa = 1): no dead band, so after a
-        transient h keeps growing until the error estimate limits it, and a change
-        of the estimate at round-off level changes h at round-off level, never the
-        step count by a jump. Growth is at most 1 + pi/2 per step and never right
-        after a failure. A step held by the stability region of BDF4 or 5, not by the
-        solution, lowers the order (``_stability_limited``).
-        """
+        """After an accepted step: the error estimates of orders q - 1 and q + 1 for the
+        controller (``StepController.choose``), and its order and step size applied."""
         q = self.q
         delta_prev = self.delta_prev
         self.delta_prev = delta
-        if self.fixed_step:
-            return
-        if self.first_step:
-            # The initial step is deliberately tiny: let it grow fast, at order 1.
-            self.first_step = False
-            eta = min(_eta(error, 1), ETA_MAX_FIRST)
-            if eta >= 2.0 and not failed_this_step:
-                self._change_step(eta)
-            return
-        new_q, eta = q, _eta(error, q)
-        if self.steps_at_this_order >= q + 1 and not self.fixed_order:
-            err_down = err_up = None
+        ctrl = self.controller
+        err_down = err_up = None
+        if not (ctrl.fixed_step or ctrl.first_step) and ctrl.wants_order_estimates(q):
             if q > 1 and delta_prev is not None and self._dot_ok:
                 # both norms in one compiled call, the same numbers as the two below
                 n_down, n_up = self._kernels.wrms_order_errors(
@@ -882,82 +524,12 @@ class NordsieckBDF:
                     err_up = nd.higher_order_error_coefficient(q) * self.norm(
                         delta - delta_prev, error_weights
                     )
-            if err_down is not None:
-                eta_down = _eta(err_down, q - 1)
-                if eta_down > eta:
-                    new_q, eta = q - 1, eta_down
-            if self._stability_limited(q, error, err_down, err_up):
-                new_q, eta = q - 1, min(eta_down, 1.0)
-            elif q < self.max_order and err_up is not None:
-                eta_up = _eta(err_up, q + 1) / ORDER_UP_BIAS
-                if eta_up > eta and self.h * eta_up < 0.5 * self.stability_h.get(q + 1, math.inf):
-                    new_q, eta = q + 1, eta_up
-        eta = 1.0 + math.atan(eta - 1.0)
-        if failed_this_step:
-            eta = min(eta, 1.0)
-        if new_q == q + 1:
-            nd.increase_order(self.z, q, delta)
-        elif new_q == q - 1:
-            nd.decrease_order(self.z, q)
+        new_q, eta = ctrl.choose(q, self.h, error, err_down, err_up, failed_this_step)
         if new_q != q:
-            self.q = new_q
-            self.delta_prev = None
-            self.steps_at_this_order = 0
-            self.flat_steps = 0
+            self._set_order(new_q, delta)
+            ctrl.order_changed()
         if eta != 1.0:
             self._change_step(eta)
-
-    def _stability_limited(self, q, error, err_down, err_up) -> bool:
-        """Whether order q's step is held by its stability region, not by the solution.
-
-        BDF3, 4 and 5 are not A-stable (A(86 deg), A(73 deg), A(51 deg)). Where a stiff,
-        strongly non-normal mode lies near that boundary (the upwind transport of a pipe
-        of many volumes: its eigenvalues all sit at -1/tau, its pseudospectrum fills the
-        disc of radius 1/tau about them, touching the imaginary axis), a step beyond the
-        limit lets a parasitic component grow until the error test holds it back. The
-        step then stays near the limit with the local error at its target, and the
-        error estimates of orders q - 1, q and q + 1 are of one size (the parasitic
-        component is in every difference), where a resolved solution gives estimates
-        falling by a factor ~h/tau_solution per order. Measured on the 1000-volume steam
-        pipe (tests/field/long_pipe_step.toml) after its temperature front has left:
-        order 4 held h at 4 ms for 255 steps with e3, e4, e5 = 0.045, 0.030, 0.024 of the
-        tolerance, where order 3 took 12 steps of 0.13 s over the same interval.
-
-        The test, a simple form of CVODE's stability-limit detection (STALD; IDA has
-        none): q >= MIN_Q_STAB, the error at least half its target, e_q >= FLAT_RATIO
-        e_(q-1) and e_(q+1) >= FLAT_RATIO e_q, on FLAT_STEPS_PER_ORDER (q + 1) accepted
-        steps in a row whose h stays within 20 % of the first's. Then the order drops
-        by one and the step size is remembered: order q is raised to again only at
-        steps below half of it (a smaller h is inside the stability region); the
-        memory is kept across restarts, the plant's fast modes being the same.
-
-        Why these conditions (measured): without the held-step condition the
-        transistor amplifier of benchmarks/solver_vs_peers.py, a resolved oscillation
-        whose estimates are also flat in the order while h follows the input, lost one
-        digit at rtol 1e-8 (7.25 -> 6.16) for 33 % more steps; with it the Test Set
-        counts are unchanged. At order 3 (A(86 deg)) the test fired on the pipe in its
-        smooth phase, where order 2 then took 44 steps against order 4's 17 over 5 to
-        61 s, and a larger error; so orders below 4 are left alone.
-        """
-        if q < MIN_Q_STAB or err_down is None or err_up is None:
-            self.flat_steps = 0
-            return False
-        flat = (
-            error >= 0.5 * ERROR_TARGET
-            and error >= FLAT_RATIO * err_down
-            and err_up >= FLAT_RATIO * error
-        )
-        if not flat:
-            self.flat_steps = 0
-            return False
-        if self.flat_steps == 0 or not 0.8 < self.h / self.flat_h < 1.25:
-            self.flat_steps, self.flat_h = 0, self.h  # a new run at this step size
-        self.flat_steps += 1
-        if self.flat_steps < FLAT_STEPS_PER_ORDER * (q + 1):
-            return False
-        self.flat_steps = 0
-        self.stability_h[q] = self.h
-        return True
 
     # -- dense output ----------------------------------------------------------------------
     def interpolate(self, t: float) -> tuple[np.ndarray, np.ndarray]:
@@ -991,27 +563,3 @@ class NordsieckBDF:
         if self.names is not None and i < len(self.names):
             return f"{self.names[i]} (index {i})"
         return f"y[{i}]"
-
-
-def _largest(scaled: np.ndarray, k: int = 5) -> list:
-    """Indices of the k largest |entries| (the unknowns whose last Newton update was
-    largest against their tolerance: named in the failure message)."""
-    k = min(k, scaled.size)
-    idx = np.argpartition(-np.abs(scaled), k - 1)[:k]
-    return idx[np.argsort(-np.abs(scaled[idx]))].tolist()
-
-
-def all_finite(f: np.ndarray) -> bool:
-    """No NaN or inf in f; the same answer as np.all(np.isfinite(f)), in 1 us instead of 4.
-
-    f.f is not finite whenever an entry is NaN or inf (inf * inf = inf, NaN spreads),
-    so a finite dot product proves every entry finite; only a non-finite one (an
-    entry NaN or inf, or finite entries whose squares overflow) needs the full test.
-    """
-    s = f.dot(f)
-    return math.isfinite(s) or bool(np.isfinite(f).all())
-
-
-def _eta(error: float, order: int) -> float:
-    """Step ratio that brings the local error of ``order`` to ERROR_TARGET."""
-    return (error / ERROR_TARGET + 1e-10) ** (-1.0 / (order + 1))

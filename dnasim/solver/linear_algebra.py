@@ -93,26 +93,6 @@ def colour_columns(pattern: scipy.sparse.csc_matrix) -> list[np.ndarray]:
     return [np.flatnonzero(group_of == g) for g in range(n_groups)]
 
 
-def _columns_residual(residual) -> Callable | None:
-    """``residual_for_columns`` of the object the residual is a method of (a compiled
-    plant: ``dnasim.compilation.system.System.residual``), directly or wrapped in the solver's
-    counting wrapper (``.residual``); None for any other function.
-
-    ``residual_for_columns(cols)`` returns F_cols(t, y, yp, f0): F at a point that
-    differs from the point of f0 = F(t, y0, yp0) only in the columns ``cols``, with the
-    rows that read none of them taken from f0. A column group's Jacobian entries are
-    rows that read the group's columns, so the matrix is the same as from whole
-    evaluations (tests/test_jacobian_partial.py), at the cost of the components the
-    group touches: a Jacobian of attemperator.toml costs 0.90 of its whole-plant
-    evaluations (its pipe is in 11 of the 11 groups, the boundaries and valves in 3
-    to 5), of superheater_line.toml also 0.90 (each pipe in 12 or 13 of 13)."""
-    for f in (residual, getattr(residual, "residual", None)):
-        method = getattr(getattr(f, "__self__", None), "residual_for_columns", None)
-        if callable(method):
-            return method
-    return None
-
-
 class SingularMatrixError(DAEError):
     """The iteration matrix could not be factorised."""
 
@@ -123,6 +103,22 @@ class IterationMatrix:
     ``residual`` is the counted residual function; ``jac`` an optional user
     Jacobian ``jac(t, y, yp, cj)``; ``sparsity`` an optional (n, n) pattern of
     dF/dy + dF/dy' (anything scipy.sparse accepts, or a dense 0/1 array).
+
+    ``residual_for_columns`` (optional, with a pattern only): the partial-residual
+    channel, given by the caller (a compiled plant's
+    ``dnasim.compilation.system.System.residual_for_columns``). ``residual_for_columns(cols)``
+    returns F_cols(t, y, yp, f0): F at a point that differs from the point of
+    f0 = F(t, y0, yp0) only in the columns ``cols``, with the rows that read none of
+    them taken from f0. A column group's Jacobian entries are rows that read the
+    group's columns, so the matrix is the same as from whole evaluations
+    (tests/test_jacobian_partial.py), at the cost of the components the group
+    touches: a Jacobian of attemperator.toml costs 0.90 of its whole-plant
+    evaluations (its pipe is in 11 of the 11 groups, the boundaries and valves in 3
+    to 5), of superheater_line.toml also 0.90 (each pipe in 12 or 13 of 13). None:
+    every group is a whole evaluation of ``residual``.
+
+    ``side`` (optional): side(t, y, yp) -> array whose signs mark the smooth piece of
+    the residual (the restart switches, module doc); None: no kinks known.
     """
 
     def __init__(
@@ -133,6 +129,9 @@ class IterationMatrix:
         sparsity=None,
         names: Sequence[str] | None = None,
         equation_names: Sequence[str] | None = None,
+        *,
+        residual_for_columns: Callable | None = None,
+        side: Callable | None = None,
     ):
         self.residual = residual
         self.n = n
@@ -180,17 +179,15 @@ class IterationMatrix:
                 pos = np.flatnonzero(group_of_entry == g)
                 self._group_entries.append((cols, pos, pattern.indices[pos], cols_of_entry[pos]))
             # per group: F at a point perturbed in the group's columns, evaluating only
-            # the rows that read them (``_columns_residual``), or None
-            for_columns = _columns_residual(residual)
+            # the rows that read them (``residual_for_columns``, class doc), or None
             self._group_residuals = [
-                None if for_columns is None else for_columns(cols) for cols in self.groups
+                None if residual_for_columns is None else residual_for_columns(cols)
+                for cols in self.groups
             ]
         self.matrix = None
         self.cj = None
         self._lu = None
-        # side(t, y, yp) -> array whose signs mark the smooth piece of the residual
-        # (the restart switches); None: no kinks known
-        self.side = None
+        self.side = side  # the signs of the restart switches (class doc), or None
         self.flipped_groups = 0  # groups differenced backwards to stay on one side
 
     # -- building ---------------------------------------------------------------------------

@@ -39,10 +39,16 @@ H_SCALE = 1.0  # [s]
 def iteration_matrix(dae) -> IterationMatrix:
     """The finite-difference Jacobian of ``dae``'s residual on its sparsity (colouring
     and band ordering made here: for a 10000-volume pipe this costs more than the
-    Newton iteration, so a caller with several solves makes it once)."""
+    Newton iteration, so a caller with several solves makes it once), with ``dae``'s
+    partial-residual channel ``residual_for_columns`` where it has one (a System)."""
     pattern = sp.csc_matrix(dae.pattern_y + dae.pattern_yp)
     return IterationMatrix(
-        dae.residual, len(dae.names), sparsity=pattern, names=dae.names, equation_names=dae.eq_names
+        dae.residual,
+        len(dae.names),
+        sparsity=pattern,
+        names=dae.names,
+        equation_names=dae.eq_names,
+        residual_for_columns=getattr(dae, "residual_for_columns", None),
     )
 
 

@@ -130,8 +130,8 @@ class SteadyState:
 
 
 class _Counted:
-    """The System's residual, counted into ``stats`` (``IterationMatrix`` finds the
-    System's ``residual_for_columns`` through ``residual`` and counts partial
+    """The System's residual, counted into ``stats`` (``IterationMatrix`` is given the
+    System's ``residual_for_columns`` by ``_CountedSystem`` and counts partial
     evaluations into ``stats.residual_evals``)."""
 
     def __init__(self, residual, stats):
@@ -152,6 +152,7 @@ class _CountedSystem:
         from dnasim.start.consistent import iteration_matrix
 
         self.residual = _Counted(system.residual, stats)
+        self.residual_for_columns = system.residual_for_columns
         self.nominal = system.nominal
         self.pattern_y = system.pattern_y
         self.pattern_yp = system.pattern_yp

@@ -105,6 +105,7 @@ def _operating_point(system, sim, t):
         algebraic=dae.algebraic,
         quadrature=dae.quadrature,
         jac_sparsity=dae.jac_sparsity,
+        residual_for_columns=getattr(dae, "residual_for_columns", None),
         calc_initial=False,
         rtol=rtol,
         atol=dae.atol_vector(atol, y0),
