@@ -271,7 +271,7 @@ def base_text():
 
 BAD_CASES = {
     "malformed_toml": (
-        lambda s: s.replace('tau = "5 s"', 'tau = "5 s'),
+        lambda s: s.replace('T_lag = "5 s"', 'T_lag = "5 s'),
         ["malformed TOML", "line "],
     ),
     "unknown_type": (
@@ -279,7 +279,7 @@ BAD_CASES = {
         ["[components.sensor], key 'type'", "did you mean 'TemperatureSensor'?"],
     ),
     "unknown_parameter": (
-        lambda s: s.replace('tau = "5 s"', 'tau = "5 s"\ntaux = 1'),
+        lambda s: s.replace('T_lag = "5 s"', 'T_lag = "5 s"\ntaux = 1'),
         ["[components.sensor], key 'taux'", "unknown parameter", "did you mean 'tau'?"],
     ),
     "missing_parameter": (

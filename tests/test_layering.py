@@ -55,7 +55,7 @@ STAGES: list[tuple[str, list[str]]] = [
     ("simulation", ["dnasim.run.simulation"]),
     ("plant", ["dnasim.plant.plant"]),
     ("spec", ["dnasim.plant.spec"]),
-    ("plant files", ["dnasim.plant.plantfile", "dnasim.plant.examples"]),
+    ("plant files", ["dnasim.plant.plantfile", "dnasim.plant.migrations", "dnasim.plant.examples"]),
     ("cases", ["dnasim.plant.cases"]),
     (
         "runner",

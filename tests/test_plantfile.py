@@ -49,7 +49,7 @@ BASE = textwrap.dedent(
 
     [components.sensor]
     type = "TemperatureSensor"
-    tau = "5 s"
+    T_lag = "5 s"
     ports = { port = "n_mix" }
 
     [components.pi]
@@ -194,13 +194,13 @@ def test_setpoint_time_function_in_measured_unit():
 
 
 def test_malformed_toml_names_file_and_line():
-    text = BASE.replace('tau = "5 s"', 'tau = "5 s')
+    text = BASE.replace('T_lag = "5 s"', 'T_lag = "5 s')
     with pytest.raises(PlantError) as info:
         _decode(text, "bad.toml")
     msg = str(info.value)
     assert msg.startswith("bad.toml, line ")
     line = int(msg.split("line ")[1].split(",")[0])
-    assert "tau" in text.splitlines()[line - 1]
+    assert "T_lag" in text.splitlines()[line - 1]
     assert "malformed TOML" in msg
 
 
@@ -217,7 +217,7 @@ def test_unknown_type_suggests_closest():
 
 
 def test_unknown_parameter_suggests_closest():
-    msg = errors_of(BASE.replace('tau = "5 s"', 'tau = "5 s"\ntua = 3'))
+    msg = errors_of(BASE.replace('T_lag = "5 s"', 'T_lag = "5 s"\ntua = 3'))
     assert "[components.sensor], key 'tua'" in msg and "did you mean 'tau'?" in msg
 
 
@@ -239,7 +239,7 @@ def test_wrong_dimension():
         ('p = "100 bar"', "p = 0", ["key 'p'", "out of the physical range"]),
         ('V = "0.3 m3"', 'V = "0 m3"', ["key 'V'", "out of the physical range", "volume"]),
         ('T = "200 degC"', 'T = "-300 degC"', ["key 'T'", "out of the physical range"]),
-        ('tau = "5 s"', 'tau = "-5 s"', ["key 'tau'", "out of range", "at least 0 s"]),
+        ('T_lag = "5 s"', 'T_lag = "-5 s"', ["key 'T_lag'", "out of range", "at least 0 s"]),
     ],
 )
 def test_out_of_range(old, new, words):
@@ -309,7 +309,7 @@ def test_unknown_signal_source():
 
 
 def test_all_problems_reported_together():
-    text = BASE.replace('V = "0.3 m3"', 'V = "0.3 bar"').replace('tau = "5 s"', "tua = 3")
+    text = BASE.replace('V = "0.3 m3"', 'V = "0.3 bar"').replace('T_lag = "5 s"', "tua = 3")
     with pytest.raises(PlantError) as info:
         spec_of(text)
     assert len(info.value.errors) >= 2
@@ -362,8 +362,8 @@ def test_time_function_on_a_constant_parameter():
     [
         ('type = "Valve"', "type = 3", ["key 'type'", "expected the name"]),
         ('medium = "Water"', "medium = 3", ["key 'medium'", "expected a string"]),
-        ('tau = "5 s"', "tau = true", ["key 'tau'", "boolean"]),
-        ('tau = "5 s"', "tau = [5]", ["key 'tau'", "array"]),
+        ('T_lag = "5 s"', "T_lag = true", ["key 'T_lag'", "boolean"]),
+        ('T_lag = "5 s"', "T_lag = [5]", ["key 'T_lag'", "array"]),
         ('ports = { port = "n_turbine" }', 'ports = "n_turbine"', ["key 'ports'"]),
         ('inputs = { z = "pi.z" }', "inputs = 3", ["key 'inputs'"]),
         ('z = "pi.z"', "z = 3", ["component.output"]),

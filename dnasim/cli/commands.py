@@ -103,6 +103,18 @@ def _parse_option_quantity(value, unit: str, option: str) -> float | None:
     return x
 
 
+def _need_extra(module: str, extra: str, what: str) -> None:
+    """Refuse ``what`` before any work when the optional ``module`` is not installed."""
+    import importlib
+
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        raise InputError(
+            f"{what} needs {module}, an optional dependency: pip install 'dnasim[{extra}]'"
+        ) from None
+
+
 def _split_patterns(values) -> list[str]:
     out = []
     for v in values or ():
@@ -130,6 +142,9 @@ def main(ctx):
     # delivers it only after it has cleared its output directory.
     if ctx.invoked_subcommand != "run":
         _release_signals()
+    from dnasim import plant_migrations  # old plant-file keys: one notice line each
+
+    plant_migrations.NOTICE = lambda msg: click.echo(f"dnasim: notice: {msg}", err=True)
 
 
 # --------------------------------------------------------------------------- run
@@ -330,6 +345,8 @@ def run(
     """
     old = _catch_sigterm()  # first: a SIGTERM while starting up is reported too
     out = Path(out_dir) if out_dir else Path("results") / Path(plant_file).stem
+    if html_report:
+        _need_extra("plotly", "report", "option --report")
     try:
         _run(
             plant_file,
@@ -926,7 +943,8 @@ def sweep_cmd(
                 from dask.distributed import Client
             except ImportError:
                 raise InputError(
-                    "option --scheduler needs dask.distributed: pip install 'dask[distributed]'"
+                    "option --scheduler needs dask.distributed, an optional dependency: "
+                    "pip install 'dnasim[dask]'"
                 ) from None
             try:
                 client = Client(address, timeout=10)
@@ -1163,6 +1181,63 @@ def fmu_cmd(plant_file, out_file, inputs, var_patterns):
         f"({', '.join(iface['inputs']) or 'none'}), {len(iface['outputs'])} outputs "
         f"({', '.join(iface['outputs'])})"
     )
+
+
+# --------------------------------------------------------------------------- upgrade
+
+
+@main.command(context_settings=CONTEXT_SETTINGS)
+@click.argument("plant_file", metavar="PLANT.toml", type=click.Path(dir_okay=False))
+@click.option(
+    "-o", "--output", "out_file", default=None, metavar="NEW.toml", help="Write the new file here."
+)
+@click.option("--in-place", is_flag=True, help="Rewrite PLANT.toml itself.")
+def upgrade(plant_file, out_file, in_place):
+    """Rewrite PLANT.toml in the current plant-file format ([plant] format = 2):
+    renamed keys, the old sink sign, old defaults the file relied on. Comments and
+    layout are kept; each change is printed (stderr) with its table, key and line.
+    Without -o or --in-place the new file goes to stdout."""
+    from dnasim.core.errors import OutputError, PlantError
+    from dnasim.plant.migrations import upgrade_text
+    from dnasim.run.output import _atomic_write
+
+    if out_file and in_place:
+        raise InputError("give -o NEW.toml or --in-place, not both")
+    path = Path(plant_file)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such plant file") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a UTF-8 text file; save the plant file as UTF-8") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the plant file: {exc.strerror or exc}") from None
+    try:
+        new, changes, reviews = upgrade_text(text, str(path))
+    except PlantError as exc:
+        raise InputError(str(exc)) from None
+    for line in changes:
+        click.echo(f"dnasim: upgrade: {line}", err=True)
+    for line in reviews:
+        click.echo(f"dnasim: {line}", err=True)
+    if not changes:
+        click.echo(f"dnasim: upgrade: {path} is already in the current format", err=True)
+    target = path if in_place else Path(out_file) if out_file else None
+    if target is None:
+        click.echo(new, nl=False)
+        return
+    if not changes and target == path:
+        return
+    try:
+        mode = target.stat().st_mode & 0o7777 if target.exists() else None
+        _atomic_write(target, lambda f: f.write(new.encode("utf-8")))
+        if mode is not None:
+            os.chmod(target, mode)  # the temporary file's 0600 is not the plant file's
+    except OutputError as exc:
+        raise InputError(str(exc)) from None
+    except OSError as exc:
+        raise InputError(f"cannot write {target}: {exc.strerror or exc}") from None
+    click.echo(f"dnasim: upgrade: wrote {target}", err=True)
 
 
 if __name__ == "__main__":  # pragma: no cover

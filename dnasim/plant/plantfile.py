@@ -384,8 +384,10 @@ def _deep_line(text: str, limit: int = DEEP_NESTING) -> int | None:
 
 
 def _decode(text: str, path: str) -> dict:
+    from dnasim.plant.migrations import migrate  # [plant] format, old keys (docs/plant_files.md)
+
     try:
-        return tomllib.loads(text)
+        return migrate(tomllib.loads(text), path, text)
     except RecursionError:
         line = _deep_line(text)
         where = f"{path}, line {line}" if line else path
@@ -1105,12 +1107,17 @@ def parse_plant(
                 errors.raise_if_any()  # one paragraph: nothing of the file is used
         elif k == "atmosphere":
             atmosphere = _atmosphere(v, errors)
+        elif k == "format":  # decoded data not read by _decode: the version checked only
+            from dnasim.plant.migrations import file_format
+
+            file_format(data, path, errors.lines)
         else:
             errors.add(
                 ("plant",),
                 k,
-                "unknown key; [plant] has name, description, medium, atmosphere and import"
-                + suggest(k, ("name", "description", "medium", "atmosphere", "import")),
+                "unknown key; [plant] has format, name, description, medium, atmosphere and "
+                "import"
+                + suggest(k, ("format", "name", "description", "medium", "atmosphere", "import")),
             )
     sim = _simulation(data, errors)
     comps = data.get("components")

@@ -44,7 +44,12 @@ def solve_ida(
     linsolver=None,
     max_num_steps=100000,
 ):
-    from sksundae.ida import IDA
+    try:
+        from sksundae.ida import IDA
+    except ImportError:
+        raise ImportError(
+            "the IDA backend needs scikit-sundae, an optional dependency: pip install 'dnasim[ida]'"
+        ) from None
 
     from dnasim.solver.result import DAEResult
 

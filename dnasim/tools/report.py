@@ -559,7 +559,13 @@ def _isfloat(v) -> bool:
 
 
 def _plotly_source() -> bytes:
-    return resources.files("plotly").joinpath("package_data", PLOTLY_JS).read_bytes()
+    try:
+        files = resources.files("plotly")
+    except ModuleNotFoundError:
+        raise ImportError(
+            "report.html needs plotly, an optional dependency: pip install 'dnasim[report]'"
+        ) from None
+    return files.joinpath("package_data", PLOTLY_JS).read_bytes()
 
 
 def write_plotly_js(out_dir) -> tuple[Path, bool]:
