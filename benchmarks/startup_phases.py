@@ -85,7 +85,7 @@ timed(dnasim.cli.commands, "_prepare_output", "prepare")
 timed(dnasim.cli.commands, "_coolprop_cache", "prepare")  # imports dnasim.plant.plantfile
 
 orig_load = dnasim.cli.commands._load
-def load(plant_file):
+def load(plant_file, *a, **k):
     s = clock()
     import dnasim.plant.plantfile as pf
     import dnasim.media.registry as reg
@@ -105,7 +105,7 @@ def load(plant_file):
     timed(runner, "write_events_csv", "files")
     timed(runner, "write_steps_csv", "files")
     s = clock()
-    r = orig_load(plant_file)
+    r = orig_load(plant_file, *a, **k)
     acc["load"] = clock() - s
     return r
 dnasim.cli.commands._load = load
