@@ -373,7 +373,7 @@ def test_tabular_medium_is_announced_before_its_tables_are_built(tmp_path, monke
             return real("Water")  # the same fluid, without 15 s of table building
         return real(name, *a, **k)
 
-    import dnasim.cli.commands as cli
+    import dnasim.cli.run_command as cli  # `run` and its helpers
 
     real_notice = cli._tabular_notice
 
