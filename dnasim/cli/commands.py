@@ -142,7 +142,7 @@ def main(ctx):
     # delivers it only after it has cleared its output directory.
     if ctx.invoked_subcommand != "run":
         _release_signals()
-    from dnasim import plant_migrations  # old plant-file keys: one notice line each
+    from dnasim.plant import migrations as plant_migrations  # old plant-file keys: one notice line each
 
     plant_migrations.NOTICE = lambda msg: click.echo(f"dnasim: notice: {msg}", err=True)
 
@@ -432,12 +432,16 @@ def _run(
     dt = _parse_option_quantity(output_interval, "s", "--output-interval")
     if dt is not None:
         sim.output_interval = dt
+        sim.t_eval = None  # the option replaces the file's output times
     from dnasim.core.errors import DnasimError, OutputError, PlantError
 
     try:
         sim.check_output_points()
     except PlantError as exc:
-        src = "options --output-interval/--t-end" if (dt or x) else plant_file
+        if sim.t_eval is not None:  # the file's t_eval against --t-end
+            src = f"{plant_file} with option --t-end" if x is not None else plant_file
+        else:
+            src = "options --output-interval/--t-end" if (dt or x) else plant_file
         raise InputError(f"{src}: {exc}") from None
     patterns = _split_patterns(var_patterns)
     plot = plot or bool(patterns)
@@ -922,6 +926,7 @@ def sweep_cmd(
 
             spec = copy.deepcopy(spec)
             spec.simulation.output_interval = dt
+            spec.simulation.t_eval = None  # the option replaces the file's output times
         check_output_sizes(spec, cases, dt)
     except CaseError as exc:
         src = "option --output-interval" if dt is not None else plant_file
