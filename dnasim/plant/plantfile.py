@@ -502,7 +502,7 @@ def _t_eval(sim, s: SimulationSettings, errors: Problems, table, times_ok: bool)
         errors.add(
             table,
             "t_eval",
-            f"expected a list of times such as [\"0 s\", \"10 min\", 1800], got {type_name(v)}",
+            f'expected a list of times such as ["0 s", "10 min", 1800], got {type_name(v)}',
         )
         return
     times, bad = [], False
@@ -512,7 +512,7 @@ def _t_eval(sim, s: SimulationSettings, errors: Problems, table, times_ok: bool)
                 table,
                 "t_eval",
                 f"t_eval[{k}]: expected a number [s] or a string with a unit such as "
-                f"\"10 min\", got {type_name(x)} ({x!r})",
+                f'"10 min", got {type_name(x)} ({x!r})',
             )
             bad = True
             continue

@@ -639,8 +639,7 @@ def _attr_value(v):
     if v is None:
         return ""
     if isinstance(v, tuple | list | np.ndarray) and all(
-        isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
-        for x in v
+        isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool) for x in v
     ):
         return np.asarray(v, dtype=float)
     if isinstance(v, bool | np.bool_):
