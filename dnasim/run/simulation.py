@@ -71,6 +71,7 @@ def simulation_keywords(settings, t_end: float | None = None, **overrides):
     }
     if getattr(settings, "t_eval", None) is not None:
         kw["t_eval"] = list(settings.t_eval)
+        kw.pop("output_interval")
     if settings.max_step is not None:
         kw["max_step"] = settings.max_step
     if settings.max_steps is not None:

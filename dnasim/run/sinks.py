@@ -464,11 +464,15 @@ class NetCDFSink:
             return
         main, left = [], []
         prev_t = self._prev_t
+        rc = self.names.index(RESTART_COLUMN) if RESTART_COLUMN in self.names else None
         for k in range(n):
             t, row = pending[k]
             nxt = pending[k + 1][0] if k + 1 < len(pending) else None
-            # both sides of a jump: the row before (same time as the next) is the left limit
-            (left if nxt == t else main).append((t, row, prev_t == t))
+            # both sides of a jump: the row before (same time as the next) is the left limit;
+            # the row after it is flagged, as is a row whose restart column says so (with
+            # t_eval only the right limit is handed over: ``AtTimes``)
+            flag = prev_t == t or (rc is not None and row[rc] == 1.0)
+            (left if nxt == t else main).append((t, row, flag))
             prev_t = t
         with _signals_blocked():
             try:
