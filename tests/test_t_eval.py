@@ -248,3 +248,26 @@ def test_ida_honours_output_interval_and_keeps_its_steps():
     steps = simulate(system, t_end=60.0, solver=solver)
     np.testing.assert_array_equal(res.steps, steps.steps)
     assert res.stats["steps"] == steps.stats["steps"]
+
+
+def test_ida_output_grid_across_a_located_switch():
+    # the attemperator to 700 s: time events at 120, 600 and 660 s and the controller's
+    # limit located at 638 s, where IDA hands over its root before the output times
+    # inside that step can be interpolated
+    def system():  # a fresh System for each run: a System run twice with IDA takes
+        return dnasim.compile(load(ATTEMPERATOR).plant)  # other steps the second time
+
+    solver = IDA(rtol=1e-7, atol_scaled=1e-8)
+    res = simulate(system(), t_end=700.0, solver=solver, output_interval=10.0)
+    assert res.success, res.message
+    t_switch = res.events[0]["t"]
+    assert 630 < t_switch < 640
+    np.testing.assert_array_equal(res.t, np.union1d(np.arange(0.0, 701.0, 10.0), [t_switch]))
+    np.testing.assert_array_equal(res.t[res.restart], [120.0, 600.0, t_switch, 660.0])
+    steps = simulate(system(), t_end=700.0, solver=solver)
+    np.testing.assert_array_equal(res.steps, steps.steps)  # interpolated, not stopped at
+    # and the rows are those of the run without output times where the two coincide:
+    # at its steps (the step-end states are the same numbers)
+    common = np.intersect1d(res.t, steps.t)
+    assert len(common) >= 5  # t0, the time events, the switch, t_end
+    np.testing.assert_array_equal(res.at(common)["att.T"], steps.at(common)["att.T"])
