@@ -271,3 +271,21 @@ def test_ida_output_grid_across_a_located_switch():
     common = np.intersect1d(res.t, steps.t)
     assert len(common) >= 5  # t0, the time events, the switch, t_end
     np.testing.assert_array_equal(res.at(common)["att.T"], steps.at(common)["att.T"])
+
+
+def test_sweep_rows_are_the_t_eval_times(tmp_path):
+    from dnasim.tools.sweeps import sweep
+
+    loaded = loads(_with_sim("t_eval = [0, 5, 10, 13.7, 60]"), "lag.toml")
+    res = sweep(loaded, {"sensor.T_lag": ["4 s", "8 s"]}, out_dir=tmp_path / "a")
+    np.testing.assert_array_equal(res.dataset["time"].values, [0.0, 5.0, 10.0, 13.7, 60.0])
+    lag8 = res.dataset["sensor.T_s"].values[1]
+    # tolerance: the file's rtol 1e-6 over 50 s of a 50 K step (measured 2e-4 K)
+    np.testing.assert_allclose(lag8, _exact([0.0, 5.0, 10.0, 13.7, 60.0]), rtol=0, atol=1e-3)
+    # a case's output_interval replaces the file's times; a case's t_end before the
+    # last of them is that case's input error, named
+    cases = [{"simulation.output_interval": "20 s"}, {"simulation.t_end": "30 s"}]
+    res = sweep(loaded, cases, out_dir=tmp_path / "b")
+    status = list(res.summary["status"])
+    assert status == ["finished", "input-error"], list(res.summary["message"])
+    assert "t_eval[4] = 60 s is after t_end = 30 s" in res.summary["message"][1]

@@ -465,6 +465,8 @@ def _case_settings(spec, case):
     if not values:
         return spec.simulation
     raw = {k: v for k, v in asdict(spec.simulation).items() if v is not None}
+    if "output_interval" in values:
+        raw.pop("t_eval", None)  # a case's output interval replaces the file's times
     raw.update(values)
     errors = Problems(str(spec.path), None)
     sim = _simulation({"simulation": raw}, errors)
