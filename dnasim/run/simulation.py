@@ -260,7 +260,7 @@ def _checked_t_eval(t_eval, t0: float, t_end: float) -> np.ndarray:
         ) from None
     problem = t_eval_problem(times.tolist(), t0, t_end)
     if problem:
-        raise PlantError(f"simulate(): t_eval {problem}")
+        raise PlantError(f"simulate(): t_eval: {problem}")
     return times
 
 
