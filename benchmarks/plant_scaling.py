@@ -4,6 +4,8 @@
     .venv/bin/python benchmarks/plant_scaling.py --sizes 10 30   # quick run
     .venv/bin/python benchmarks/plant_scaling.py --no-ida
     .venv/bin/python benchmarks/plant_scaling.py --geometry      # the pipe from geometry
+    .venv/bin/python benchmarks/plant_scaling.py --sizes 1000 10000 --wall sine --no-ida
+    .venv/bin/python benchmarks/plant_scaling.py --sizes 1000 --medium "IF97-TABLES::Water"
 
 Plant: steam reservoir (50 bar, 500 C, stepping to 520 C at t = 1 s) -> Pipe
 (20 m, D = 0.1 m, kA = 6283 W/K, C_wall = 1.3e5 J/K, N volumes) -> valve ->
@@ -24,6 +26,12 @@ T_out at t_end, and the ratio of the CPU times IDA/dnasim (> 1: dnasim faster).
 ``--json FILE`` also writes the rows (T_out to full precision) for comparing two
 versions.
 
+``--wall sine``: the wall temperature prescribed, T_wall(t) = 500 C + 20 K sin(2 pi t /
+20 s) (no wall storage), on top of the inlet step. ``--medium "IF97-TABLES::Water"``:
+the same plant on the bicubic IF97 tables (dnasim.media.if97_tables). N = 10000 is
+two 5000-volume pipes in series (``--sizes 10000``; a Pipe has at most 5000 volumes;
+not in the default list: minutes of CPU).
+
 ``--geometry``: the same pipe described by its geometry instead (issue 22): D = 0.1 m,
 length 20 m, a 5 mm carbon-steel wall (its mass and c(T), lambda(T)), Darcy-Weisbach
 with Colebrook and Gnielinski's (VDI G1) heat transfer from the steam's IAPWS transport
@@ -42,7 +50,7 @@ import time
 
 import numpy as np
 
-from dnasim.core.timefunctions import Step
+from dnasim.core.timefunctions import Sine, Step
 from dnasim.library import Pipe, PressureBoundary, Valve
 from dnasim.media import get_medium
 from dnasim.plant.plant import Plant
@@ -51,37 +59,64 @@ from dnasim.start.initial import initial_values
 T_END = 60.0
 
 
-def steam_pipe(n, geometry=False):
-    plant = Plant(f"steam_pipe_{n}", medium="Water")
-    L, D, s = 20.0, 0.1, 0.005
+#: --medium: the water medium of the plant (e.g. "IF97-TABLES::Water", the tables)
+MEDIUM = {"name": "Water"}
+
+
+#: most volumes of one Pipe (its n_volumes limit): longer pipes are pipes in series
+MAX_VOLUMES_PER_PIPE = 5000
+
+
+def steam_pipe(n, geometry=False, wall="storage"):
+    """The plant of the module doc; N > 5000 volumes as ceil(N / 5000) equal pipes in
+    series (20 m in all, volume, kA, friction and wall shared out by length)."""
+    plant = Plant(f"steam_pipe_{n}", medium=MEDIUM["name"])
+    L_all, D, s = 20.0, 0.1, 0.005
+    parts = -(-n // MAX_VOLUMES_PER_PIPE)
+    if n % parts:
+        raise SystemExit(f"N = {n}: more than {MAX_VOLUMES_PER_PIPE} volumes must split evenly")
+    L = L_all / parts
     plant.add(PressureBoundary("steam", p=50e5, T=Step(1.0, 773.15, 793.15), m_nominal=2.0))
-    if geometry:
-        pipe = Pipe(
-            "pipe",
-            D=D,
-            length=L,
-            wall_thickness=s,
-            wall_material="carbon steel",
-            n_volumes=n,
-            m_nominal=2.0,
-        )
-    else:
-        pipe = Pipe(
-            "pipe",
-            V=math.pi / 4 * D**2 * L,
-            kA=1000.0 * math.pi * D * L,
-            k=2e5,
-            C_wall=7850.0 * math.pi * (D + s) * s * L * 500.0,
-            n_volumes=n,
-            m_nominal=2.0,
-        )
-    plant.add(pipe)
+    nodes = ["in"] + [f"mid{k}" for k in range(1, parts)] + ["out"]
+    for k in range(parts):
+        name = "pipe" if parts == 1 else f"pipe{k + 1}"
+        if geometry:
+            pipe = Pipe(
+                name,
+                D=D,
+                length=L,
+                wall_thickness=s,
+                wall_material="carbon steel",
+                n_volumes=n // parts,
+                m_nominal=2.0,
+            )
+        elif wall == "sine":  # a prescribed wall temperature 500 +- 20 C, period 20 s
+            pipe = Pipe(
+                name,
+                V=math.pi / 4 * D**2 * L,
+                kA=1000.0 * math.pi * D * L,
+                k=2e5 / parts,
+                T_wall=Sine(773.15, 20.0, 20.0),
+                n_volumes=n // parts,
+                m_nominal=2.0,
+            )
+        else:
+            pipe = Pipe(
+                name,
+                V=math.pi / 4 * D**2 * L,
+                kA=1000.0 * math.pi * D * L,
+                k=2e5 / parts,
+                C_wall=7850.0 * math.pi * (D + s) * s * L * 500.0,
+                n_volumes=n // parts,
+                m_nominal=2.0,
+            )
+        plant.add(pipe)
+        plant.connect(f"{name}.inlet", nodes[k])
+        plant.connect(f"{name}.outlet", nodes[k + 1])
     plant.add(Valve("valve", C=0.003, opening=1.0, m_nominal=2.0))
     plant.add(PressureBoundary("sink", p=45e5, m_nominal=2.0))
     for a, b in [
         ("steam.port", "in"),
-        ("pipe.inlet", "in"),
-        ("pipe.outlet", "out"),
         ("valve.inlet", "out"),
         ("valve.outlet", "exit"),
         ("sink.port", "exit"),
@@ -127,11 +162,11 @@ class PropertyTimer:
         self.evaluations = self.medium.n_evaluations - self.evaluations
 
 
-def run(n, solver, rtol=1e-6, linsolver=None, geometry=False):
-    plant = steam_pipe(n, geometry)
+def run(n, solver, rtol=1e-6, linsolver=None, geometry=False, wall="storage"):
+    plant = steam_pipe(n, geometry, wall)
     dae = plant.compile()
     y0, yp0 = initial_values(dae, 0.0, "steady")
-    water = get_medium("Water")
+    water = get_medium(MEDIUM["name"])
     with PropertyTimer(water) as timer:
         t0 = time.process_time()
         w0 = time.perf_counter()
@@ -191,12 +226,25 @@ def run(n, solver, rtol=1e-6, linsolver=None, geometry=False):
 
 
 def main(argv=None):
+    global T_END
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 300, 1000, 3000])
     ap.add_argument("--no-ida", action="store_true", help="skip the IDA comparison")
     ap.add_argument("--json", help="also write the rows to this JSON file")
     ap.add_argument("--geometry", action="store_true", help="the pipe from geometry (issue 22)")
+    ap.add_argument(
+        "--wall",
+        choices=["storage", "sine"],
+        default="storage",
+        help="storage: the lumped wall (C_wall); sine: T_wall = 500 +- 20 C, period 20 s",
+    )
+    ap.add_argument("--medium", default="Water", help='the water medium, e.g. "IF97-TABLES::Water"')
+    ap.add_argument("--t-end", type=float, default=T_END, help="simulated time [s] (60)")
     args = ap.parse_args(argv)
+    ap_t = args.t_end
+    MEDIUM["name"] = args.medium
+    T_END = ap_t
+    print(f"# medium {args.medium}, wall {args.wall}, geometry {args.geometry}, t_end {T_END:g} s")
     header = (
         f"{'N':>5} {'unknowns':>8} {'CPU s/sim-s':>11} {'us/vol-step':>11} {'steps':>6} "
         f"{'F evals':>8} "
@@ -208,7 +256,7 @@ def main(argv=None):
     print("-" * len(header))
     rows = []
     for n in args.sizes:
-        ours = run(n, "dnasim", geometry=args.geometry)
+        ours = run(n, "dnasim", geometry=args.geometry, wall=args.wall)
         row = {"N": n, "dnasim": ours}
         rows.append(row)
         per = 1e6 * ours["wall"] / (n * max(ours["steps"], 1))
@@ -220,7 +268,7 @@ def main(argv=None):
         if not ours["ok"]:
             line += " (dnasim FAILED)"
         if not args.no_ida:
-            ida = run(n, "ida", linsolver="band", geometry=args.geometry)
+            ida = run(n, "ida", linsolver="band", geometry=args.geometry, wall=args.wall)
             row["ida"] = ida
             line += (
                 f" | {ida['wall'] / T_END:>15.4f} {ida['steps']:>9} {ida['fevals']:>7} "

@@ -1,8 +1,9 @@
 """dnasim's BDF against SUNDIALS IDA (scikit-sundae) and scipy's BDF and Radau, in one run.
 
-Problems: Robertson, Chemical Akzo Nobel and the transistor amplifier (DAEs; the last
-with a singular non-diagonal mass matrix), Van der Pol mu = 1000 and HIRES
-(ODEs, written as F = y' - f(t, y) for the DAE solvers), at rtol 1e-4, 1e-6, 1e-8.
+Problems: Robertson (to 4e10 and to the Test Set's 1e11), Chemical Akzo Nobel and the
+transistor amplifier (DAEs; the last with a singular non-diagonal mass matrix), Van der
+Pol mu = 1000, HIRES and POLLU (ODEs, written as F = y' - f(t, y) for the DAE solvers),
+at rtol 1e-4, 1e-6, 1e-8.
 All solvers get the very same Python residual (or right-hand side) and tolerances,
 and every call of it is counted, finite-difference Jacobians included: dnasim's by
 its own counter (``stats["residual_evals"]``, every call), IDA's by the adapter
@@ -15,8 +16,13 @@ the machine is shared, so wall time is not used), and dnasim's time and evaluati
 divided by IDA's; at the end the geometric means of the time ratio and of the
 evaluation ratio, and the digits of dnasim minus IDA's (smallest and mean).
 References: the published values of the Test Set for IVP Solvers
-(Akzo, HIRES, transistor amplifier); for Robertson and Van der Pol, IDA/Radau at
-rtol 1e-12 in this run.
+(http://www.dm.uniba.it/~testset/: the ``solut`` routines of chemakzo.f, hires.f,
+transamp.f, pollu.f (POLLU at t = 60, RADAU5 at rtol = atol = 1.1e-18) and rober.f
+(Robertson at t = 1e11: y = 2.083340149701255e-8, 8.333360770334713e-14,
+0.9999999791665050)); for Robertson to 4e10 and Van der Pol, Radau at rtol 1e-12 in
+this run. "digits" is the Test Set's scd over the components above their atol.
+``--problems Robertson POLLU`` runs only the problems whose names contain one of the
+words.
 
 dnasim's step runs its compiled loops (``dnasim/solver/kernels.py``, numba; the same
 numbers as its numpy code to the bit) from the first step: numba is imported before
@@ -48,6 +54,10 @@ from problems import (  # noqa: E402
     HIRES_REF,
     HIRES_T_END,
     HIRES_Y0,
+    POLLU_REF,
+    POLLU_T_END,
+    POLLU_Y0,
+    ROBERTSON_1E11_REF,
     ROBERTSON_Y0,
     ROBERTSON_YP0,
     TRANSAMP_REF,
@@ -58,6 +68,7 @@ from problems import (  # noqa: E402
     akzo,
     as_residual,
     hires_rhs,
+    pollu_rhs,
     robertson,
     transamp,
     vdp_rhs,
@@ -94,6 +105,20 @@ def problems():
             ref=None,
         ),
         dict(
+            # the Test Set's ROBER interval, Robertson's atol above: y2(1e11) = 8.3e-14
+            # counts in the digits from rtol 1e-4 on (its atol 1e-14 there); an atol
+            # 1e-4 times smaller stops both solvers near t = 1e-15 at rtol 1e-8
+            name="Robertson 1e11",
+            kind="dae",
+            residual=robertson,
+            y0=ROBERTSON_Y0,
+            yp0=ROBERTSON_YP0,
+            t_end=1e11,
+            algebraic=[2],
+            atol_scale=rob_atol,
+            ref=ROBERTSON_1E11_REF,
+        ),
+        dict(
             name="Akzo Nobel",
             kind="dae",
             residual=akzo,
@@ -121,6 +146,16 @@ def problems():
             t_end=HIRES_T_END,
             atol_scale=np.full(8, 1e-4),
             ref=HIRES_REF,
+        ),
+        dict(
+            # the Test Set's tolerances: atol = rtol (pollu.f's settolerances)
+            name="POLLU",
+            kind="ode",
+            rhs=pollu_rhs,
+            y0=POLLU_Y0,
+            t_end=POLLU_T_END,
+            atol_scale=np.ones(20),
+            ref=POLLU_REF,
         ),
         dict(
             name="Transistor amp",
@@ -214,9 +249,11 @@ def best_of(repeat, fn):
     return best, out
 
 
-def run_all(rtols, repeat):
+def run_all(rtols, repeat, only=None):
     rows = []
     for p in problems():
+        if only and not any(w.lower() in p["name"].lower() for w in only):
+            continue
         residual = p.get("residual") or as_residual(p["rhs"])
         y0, yp0 = consistent_start(p)
         ref = reference(p, y0, yp0)
@@ -338,6 +375,7 @@ def main():
     parser.add_argument(
         "--numpy-step", action="store_true", help="dnasim's step without its compiled loops"
     )
+    parser.add_argument("--problems", nargs="+", help="only problems whose names contain these")
     args = parser.parse_args()
     from dnasim.solver import bdf
 
@@ -347,7 +385,7 @@ def main():
         import numba  # noqa: F401
 
         bdf.KERNELS_AFTER_STEPS_LOADED = 0
-    rows = run_all(args.rtols, args.repeat)
+    rows = run_all(args.rtols, args.repeat, args.problems)
     import sksundae
 
     step = "numpy step" if args.numpy_step else "compiled loops"

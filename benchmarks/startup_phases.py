@@ -22,6 +22,8 @@ the run (wrappers, nothing else changed) and then runs the command line as
 - ``run``: the integration, less the rows;
 - ``rows``: computing and writing the rows of results.csv (``OutputRows.row`` and
   ``CSVSink.write``/``close``) inside the run;
+- ``netcdf``: results.nc (``NetCDFSink.open``/``write``/``close``: importing h5py,
+  defining the file, writing the rows);
 - ``files``: events.csv and steps.csv;
 - ``exit``: everything after the command returned until the process ended
   (interpreter shutdown), from the child's total CPU time (``RUSAGE_CHILDREN``)
@@ -55,6 +57,7 @@ PHASES = [
     "start",
     "run",
     "rows",
+    "netcdf",
     "files",
     "exit",
 ]
@@ -85,7 +88,7 @@ timed(dnasim.cli.commands, "_prepare_output", "prepare")
 timed(dnasim.cli.commands, "_coolprop_cache", "prepare")  # imports dnasim.plant.plantfile
 
 orig_load = dnasim.cli.commands._load
-def load(plant_file):
+def load(plant_file, *a, **k):
     s = clock()
     import dnasim.plant.plantfile as pf
     import dnasim.media.registry as reg
@@ -102,10 +105,13 @@ def load(plant_file):
     timed(sinks.OutputRows, "row", "rows")
     timed(sinks.CSVSink, "write", "rows_write")
     timed(sinks.CSVSink, "close", "rows_close")
+    timed(sinks.NetCDFSink, "open", "netcdf")  # imports h5py
+    timed(sinks.NetCDFSink, "write", "netcdf")
+    timed(sinks.NetCDFSink, "close", "netcdf")
     timed(runner, "write_events_csv", "files")
     timed(runner, "write_steps_csv", "files")
     s = clock()
-    r = orig_load(plant_file)
+    r = orig_load(plant_file, *a, **k)
     acc["load"] = clock() - s
     return r
 dnasim.cli.commands._load = load
@@ -144,8 +150,9 @@ def run_once(plant: Path, out: Path, checkout: Path = ROOT) -> dict[str, float]:
         "parse": g("load", 0.0) - g("medium", 0.0),
         "compile": g("compile", 0.0),
         "start": g("start", 0.0),
-        "run": g("solve", 0.0) - g("start", 0.0) - rows,
+        "run": g("solve", 0.0) - g("start", 0.0) - rows - g("netcdf", 0.0),
         "rows": rows,
+        "netcdf": g("netcdf", 0.0),
         "files": g("files", 0.0),
     }
     ph["exit"] = total - g("end", 0.0)

@@ -55,7 +55,17 @@ STAGES: list[tuple[str, list[str]]] = [
     ("simulation", ["dnasim.run.simulation"]),
     ("plant", ["dnasim.plant.plant"]),
     ("spec", ["dnasim.plant.spec"]),
-    ("plant files", ["dnasim.plant.plantfile", "dnasim.plant.migrations", "dnasim.plant.examples"]),
+    (
+        "plant files",
+        [
+            "dnasim.plant.plantfile",
+            "dnasim.plant.toml_reading",
+            "dnasim.plant.component_info",
+            "dnasim.plant.network_check",
+            "dnasim.plant.migrations",
+            "dnasim.plant.examples",
+        ],
+    ),
     ("cases", ["dnasim.plant.cases"]),
     (
         "runner",

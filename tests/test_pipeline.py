@@ -91,11 +91,11 @@ def test_units_survive_into_dataframe_and_xarray(stepped):
     _, res = stepped
     df = res.to_dataframe()
     assert df.index.is_unique and df.index.is_monotonic_increasing
-    assert df.attrs["units"]["pipe1.T_out"] == "K" and df.attrs["units"]["t"] == "s"
+    assert df.attrs["units"]["pipe1.T_out"] == "K" and df.attrs["units"]["time"] == "s"
     assert df.attrs["units"]["inlet.p"] == "Pa"
     ds = res.to_xarray()
-    assert ds["pipe1.T_out"].attrs["units"] == "K" and ds["t"].attrs["units"] == "s"
-    assert ds["pipe1.T_out"].dims == ("t",)
+    assert ds["pipe1.T_out"].attrs["units"] == "K" and ds["time"].attrs["units"] == "s"
+    assert ds["pipe1.T_out"].dims == ("time",)  # as in results.nc and sweep.nc
     np.testing.assert_array_equal(ds["pipe1.T_out"].values, res["pipe1.T_out"])
 
 

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from dnasim import plant_migrations as pm
 from dnasim.cli.commands import main
 from dnasim.core.errors import PlantError
+from dnasim.plant import migrations as pm
 from dnasim.plant.plantfile import load, loads
 
 HERE = Path(__file__).parent

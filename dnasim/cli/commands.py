@@ -142,7 +142,7 @@ def main(ctx):
     # delivers it only after it has cleared its output directory.
     if ctx.invoked_subcommand != "run":
         _release_signals()
-    from dnasim.plant import migrations as plant_migrations  # old plant-file keys: one notice line each
+    from dnasim.plant import migrations as plant_migrations  # old plant-file keys: one notice each
 
     plant_migrations.NOTICE = lambda msg: click.echo(f"dnasim: notice: {msg}", err=True)
 

@@ -4,12 +4,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from dnasim.model.component import Component, Equation, FluidPort, Param, SignalPort, Variable
+from dnasim.library.submodels.channel import (
+    initial_phase_modes,
+    phase_switch_values,
+    toggle_phase_modes,
+)
+from dnasim.model.component import (
+    Component,
+    Equation,
+    FluidPort,
+    Param,
+    SignalPort,
+    Switch,
+    Variable,
+)
 from dnasim.model.physics import (
     M_REG_REL,
     PropertyArrays,
     energy_in,
     friction_dp,
+    has_phase_branches,
     properties,
     upwind_mean,
 )
@@ -38,6 +52,15 @@ class Attemperator(Component):
     At steady state h_v = (m_steam h_steam + m_water h_water)/(m_steam + m_water).
     The outlet and the water inlet are storage volumes: lead them to a valve or
     another resistance.
+
+    Phase mode (IF97 water, ``phase_switches``, default on): the volume keeps its phase
+    (liquid, two-phase, vapour) as a discrete mode and is evaluated on that branch
+    between located crossings of the saturation lines, as a pipe volume
+    (``dnasim.library.submodels.channel``, "Phase modes"). Without it, the steam of a line
+    whose flow has stopped (turbine valve shut) cooled by the spray to saturation put
+    the kink of rho(p, h) at h'' inside a step, and Newton failed there
+    (tests/field/superheater_turbine_closed.toml stopped at 67.7 s, h_v 0.1 kJ/kg
+    above h'' at 130 bar).
     """
 
     PARAMS = (
@@ -46,6 +69,14 @@ class Attemperator(Component):
         Param("m_nominal", "kg/s", 1.0, "typical mass flow (scales and tolerances)", min=0.0),
         Param(
             "m_reg", "kg/s", None, "friction regularisation flow (default 1e-2 m_nominal)", min=0.0
+        ),
+        Param(
+            "phase_switches",
+            "1",
+            True,
+            "keep the volume's phase as a discrete mode between located crossings of the "
+            "saturation lines (IF97 water; see dnasim.library.submodels.channel)",
+            kind="bool",
         ),
         Param("p0", "Pa", None, "initial pressure (given start)", min=0.0),
         Param("T0", "K", None, "initial temperature (given start)", min=0.0),
@@ -156,7 +187,9 @@ class Attemperator(Component):
         (``PropertyArrays``) for the steam node [0] and the volume [1]."""
         m_s, m_w, m_o, M, U, p_v, h_v, T, p_s, h_s, p_w, h_w, p_o, h_o = v
         dM, dU = vp
-        T_st, rho, u = self._props(self.medium, np.array([p_s, p_v]), np.array([h_s, h_v]))
+        mode = modes.get("phase") if self._phase_modes_on() else None
+        branch = None if mode is None else np.array([0, mode[0]], dtype=np.int64)
+        T_st, rho, u = self._props(self.medium, np.array([p_s, p_v]), np.array([h_s, h_v]), branch)
         eps = self.m_eps
         E_in = (
             energy_in(m_s, h_s, h_v, eps)
@@ -177,6 +210,48 @@ class Attemperator(Component):
 
     def design_values(self, t0, x):
         return {"m": x["m_out"]}
+
+    # ------------------------------------------------------------ phase mode
+    def _phase_modes_on(self) -> bool:
+        """The volume's phase kept as a discrete mode (class doc): IF97 water."""
+        return bool(self.params["phase_switches"]) and has_phase_branches(self.medium)
+
+    def switches(self):
+        if not self._phase_modes_on():
+            return []
+        medium, V = self.medium, self.params["V"]
+
+        def g(t, x, xp):
+            mode = x.modes.get("phase")
+            if mode is None:
+                return np.ones(2)
+            return phase_switch_values(medium, mode, x["p_v"], x["h_v"], x["M"], x["U"], V)
+
+        def action(t, x, xp, which):
+            x.modes["phase"] = toggle_phase_modes(x.modes["phase"], which)
+
+        return [
+            Switch(
+                "phase",
+                g,
+                direction=-1,
+                action=action,
+                size=2,
+                restart=True,
+                names=["h_v saturated liquid", "h_v saturated vapour"],
+                rearm=True,
+                doc="phase mode of the volume: liquid <-> two-phase at h', two-phase <-> "
+                "vapour at h''",
+            )
+        ]
+
+    def init_discrete_state(self, t0, x, xp) -> bool:
+        if not self._phase_modes_on():
+            return False
+        mode = initial_phase_modes(self.medium, [x["p_v"]], [x["h_v"]])
+        old = x.modes.get("phase")
+        x.modes["phase"] = mode
+        return old is None or not np.array_equal(old, mode)
 
     def guess_nodes(self, t0):
         P = self.params

@@ -28,6 +28,7 @@ import numpy as np
 
 from dnasim.media import if97_kernel as K
 from dnasim.media import if97_numba as NB
+from dnasim.media import kernel_cache as KC
 from dnasim.media import water_transport as WT
 from dnasim.media.base import (
     SATURATION_TRANSPORT_KEYS,
@@ -54,9 +55,11 @@ class IF97Water(Medium):
     kernel : str
         ``"numba"`` (default when numba is importable: :mod:`if97_numba`, 0.7 to 1.1 us
         per state in ``states``, 3 us per ``state`` call; the first use on a machine
-        compiles it, about 10 s CPU, later processes load it from numba's cache in about
-        0.3 s) or ``"numpy"`` (:mod:`if97_kernel`: no compilation, but 0.3 to 1 ms for a
-        single state and 1.3 to 9 us per state in calls of 1000 states).
+        compiles the parts a run calls, 6 to 9 s CPU, saying so on stderr, and later
+        processes load them from numba's cache in about 0.3 s:
+        :mod:`dnasim.media.kernel_cache`) or ``"numpy"`` (:mod:`if97_kernel`: no
+        compilation, but 0.3 to 1 ms for a single state and 1.3 to 9 us per state in
+        calls of 1000 states).
     """
 
     condensable = True
@@ -69,13 +72,12 @@ class IF97Water(Medium):
             kernel = "numba" if NB.available() else "numpy"
         if kernel not in ("numba", "numpy"):
             raise ValueError(f"kernel must be 'numba' or 'numpy', not {kernel!r}")
-        self.kernel = kernel
-        if kernel == "numba":
-            _load_compiled_kernels()
+        self.kernel = kernel  # the compiled kernels load at their first call (kernel_cache)
 
     # ------------------------------------------------------------- state
     def _compute_state(self, p: float, h: float) -> FluidState:
         if self.kernel == "numba":
+            KC.ensure("state")
             T, rho, u, s, cp, x, d_p, d_h, _, code = NB.ph_scalar(p, h)
             if code != 0:
                 raise PropertyError(self.label, p, h, "state", K.STATUS_TEXT[code])
@@ -116,8 +118,11 @@ class IF97Water(Medium):
         only. memo: None, or the caller's :meth:`states_memo` for this set of points
         (unchanged points are copied, moved ones warm-started; compiled kernel only)."""
         if self.kernel == "numba" and (branch is not None or memo is not None):
+            KC.ensure("memo" if memo is not None else "states")
             r = NB.ph_arrays(p, h, branch, memo)
         else:
+            if self.kernel == "numba":
+                KC.ensure("states")
             r = NB.ph_arrays(p, h) if self.kernel == "numba" else K.ph(p, h)
         if check:
             r.raise_first_bad(self.label)
@@ -143,6 +148,7 @@ class IF97Water(Medium):
         branch=branch, memo=memo)`` without its other fields, for a residual's call
         (``dnasim.model.physics.PropertyArrays``). Raises :class:`PropertyError`
         for the first state out of range, as ``states`` does."""
+        KC.ensure("memo")
         T, rho, u, status = NB.ph_memo_T_rho_u(p, h, branch, memo)
         if status.any():
             i = int(np.flatnonzero(status)[0])
@@ -178,6 +184,8 @@ class IF97Water(Medium):
                 if edge.any():
                     sat = self._saturated_sides(pf[edge])[side]
                     T[edge], rho[edge], cp[edge], d_p[edge], d_h[edge] = sat
+        if NB.available():
+            KC.ensure("transport")
         mu, k = WT.mu_k_ph(T, rho, cp, d_p, d_h)
         dome = (x > 0.0) & (x < 1.0)
         bad = ~st.ok.ravel() | dome | ~(np.isfinite(mu) & np.isfinite(k))
@@ -213,6 +221,8 @@ class IF97Water(Medium):
                 "p outside the IF97 saturation range [611.213 Pa, p_c = 22.064 MPa)",
             )
         (TL, rL, cL, pL, hL), (TV, rV, cV, pV, hV) = self._saturated_sides(pf)
+        if NB.available():
+            KC.ensure("transport")
         muL, kL = WT.mu_k_ph(TL, rL, cL, pL, hL)
         muV, kV = WT.mu_k_ph(TV, rV, cV, pV, hV)
         hl, hv = self.saturation_enthalpies(pf)
@@ -231,6 +241,8 @@ class IF97Water(Medium):
         each side (the forced phase branch of the compiled kernel, or the saturated
         records of the numpy kernel)."""
         if self.kernel == "numba":
+            KC.ensure("saturation")
+            KC.ensure("states")
             hl, hv = NB.saturation_arrays(p)
             out = []
             for hs, branch in ((hl, NB.LIQUID), (hv, NB.VAPOUR)):
@@ -251,6 +263,7 @@ class IF97Water(Medium):
     # ------------------------------------------------------------ h(p, T)
     def _compute_h_pT(self, p: float, T: float) -> float:
         if self.kernel == "numba":
+            KC.ensure("h_pT")
             hv, code = NB.h_pT_scalar(p, T)
         else:
             r = K.pT(p, T)
@@ -271,6 +284,7 @@ class IF97Water(Medium):
         """(h', h'') [J/kg] at p [Pa] (arrays of the shape of p); NaN outside [611.213 Pa, p_c)."""
         p = np.asarray(p, dtype=float)
         if self.kernel == "numba":
+            KC.ensure("saturation")
             return NB.saturation_arrays(p)
         hl, hv = K.saturation_enthalpies(p)
         return hl.reshape(p.shape), hv.reshape(p.shape)
@@ -287,25 +301,29 @@ class IF97Water(Medium):
         return float(self.h_px(p, x))
 
 
-def _load_compiled_kernels() -> None:
-    """Compile (first use on a machine, ~10 s) or load from numba's cache the four
-    entry points, with SIGTERM/SIGINT held meanwhile (``dnasim.cli.entry.held``): a signal
-    raised inside numba's compiler callbacks would be swallowed there (ctypes ignores
-    exceptions in callbacks) and the run would go on."""
-    if _load_compiled_kernels.done:
-        return
-    from dnasim.core.interrupts import held
-    from dnasim.media.numba_loading import install
-
-    install()  # cached kernels load without numba's compiler set-up (0.1 to 0.2 s CPU)
-    with held():
-        p, h = np.array([1e6]), np.array([1e6])
-        NB.ph_scalar(1e6, 1e6)
-        NB.ph_arrays(p, h)
-        NB.ph_arrays(p, h, memo=NB.PhMemo())
-        NB.h_pT_scalar(1e6, 400.0)
-        NB.saturation_arrays(p)
-    _load_compiled_kernels.done = True
+#: [s] CPU of compiling the transport kernel (water_transport._kernel), as measured
+TRANSPORT_CPU_S = 1.0
 
 
-_load_compiled_kernels.done = False
+def _register_kernel_groups() -> None:
+    """The compiled entry points by kind of call, each loaded (or compiled, first use on
+    a machine) at its first call in a process: :mod:`dnasim.media.kernel_cache`. The
+    CPU seconds are each group's own compile beyond the code they share (kernel_cache.
+    SHARED_CPU_S), measured with an empty NUMBA_CACHE_DIR (benchmarks/cold_start.py)."""
+    p, h = np.array([1e6]), np.array([1e6])
+    KC.register("state", (NB.ph_scalar,), lambda: NB.ph_scalar(1e6, 1e6), 0.5)
+    KC.register("states", (NB._ph_branch_loop,), lambda: NB.ph_arrays(p, h), 0.6)
+    KC.register("memo", (NB._ph_memo_loop,), lambda: NB.ph_arrays(p, h, memo=NB.PhMemo()), 1.2)
+    KC.register("h_pT", (NB.h_pT_scalar,), lambda: NB.h_pT_scalar(1e6, 400.0), 0.3)
+    KC.register("saturation", (NB._sat_loop,), lambda: NB.saturation_arrays(p), 0.6)
+    KC.register(
+        "transport",
+        (WT._kernel,),
+        lambda: WT.mu_k_ph(*(np.array([v]) for v in (400.0, 900.0, 4e3, 1e-6, -1e-3))),
+        TRANSPORT_CPU_S,
+        label="IAPWS transport",
+    )
+
+
+if NB.available():
+    _register_kernel_groups()

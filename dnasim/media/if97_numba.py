@@ -10,10 +10,12 @@ array operation, so the numpy kernel takes 340 to 1070 us for a single state
 (hundreds of small array operations) and 1.3 to 9 us per state in calls of 1000;
 this one takes 0.7 to 1.1 us per state in calls of 100 to 10000 states, and 3 us per
 scalar ``IF97Water.state(p, h)`` call including the Python around it (the old
-CoolProp path: 12 to 50 us). The price: about 10 s CPU to compile on first use on a
-machine (numba caches the result in ``__pycache__``; later processes load it in
-about 0.3 s). :func:`available` is False when numba cannot be imported; the media
-then use the numpy kernel.
+CoolProp path: 12 to 50 us). The price: 6 to 9 s CPU to compile on first use on a
+machine (12 s before the literal arguments were removed, see ``_NL``), each entry
+point at its first call (:mod:`dnasim.media.kernel_cache`, which says so on stderr);
+numba caches the result in ``__pycache__`` (or ``NUMBA_CACHE_DIR``) and later
+processes load it in about 0.3 s. :func:`available` is False when numba cannot be
+imported; the media then use the numpy kernel.
 
 Differences from the numpy kernel: the power sums use tables of powers built by
 repeated multiplication instead of exp/log per term, and a single-phase state below
@@ -334,6 +336,16 @@ def _blend(A, B, w, wT, wp):
 
 _ZERO = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
+#: False, True and the phase kinds -1 (vapour side), 0, 1 (liquid side) as array
+#: elements, for the calls that pass them as constants: numba types a constant argument
+#: as a literal (Literal[bool](True), Literal[int](1)) and compiles a separate
+#: specialisation of the callee for each value, on top of the one for a variable
+#: argument; _solve_single, _eval and _t_guess then compiled three times each (4.9 of
+#: the 8.4 CPU s of the first compile, measured with numba's compile events). An array
+#: element is typed bool / int64, so every call uses the one specialisation.
+_NL = np.array([False, True])
+_NK = np.array([-1, 0, 1], dtype=np.int64)
+
 
 @_njit
 def _eval(p, T, L, rho3):
@@ -497,11 +509,11 @@ def _solve_single(p, h, kind, lo, hi, Tw):
     else:
         T0, rho0 = _t_guess(p, h, kind)
     if not (T0 > T_MIN + 1.0):
-        rec, _, _, _ = _eval(p, T_MIN, True, rho0)
+        rec, _, _, _ = _eval(p, T_MIN, _NL[1], rho0)
         if h < rec[1]:
             return math.nan, _ZERO, 0, 4
     if kind <= 0 and not (T0 < hi - 2.0):
-        rec, _, _, _ = _eval(p, hi, False, rho0)
+        rec, _, _, _ = _eval(p, hi, _NL[0], rho0)
         if h > rec[1]:
             return math.nan, _ZERO, 0, 5
     if rho0 == rho0 and T0 > T_13 + B13 + 1.0 and T0 < _tb23(p) - B23 - 1.0:
@@ -544,8 +556,8 @@ def _solve_single(p, h, kind, lo, hi, Tw):
 def _sat_records(p):
     Ts = _tsat(p)
     _, dps = _psat_slope(Ts)
-    recL, _, _, okL = _eval(p, Ts, True, math.nan)
-    recV, _, _, okV = _eval(p, Ts, False, math.nan)
+    recL, _, _, okL = _eval(p, Ts, _NL[1], math.nan)
+    recV, _, _, okV = _eval(p, Ts, _NL[0], math.nan)
     return Ts, 1.0 / dps, recL, recV, okL and okV
 
 
@@ -581,17 +593,17 @@ def _ph_auto(p, h, Tw):
         # near p_c (where the dome closes); above H_VAP_MAX neither
         near_c = p > 21e6
         if h > H_VAP_MAX and not near_c:
-            return _single_tp(p, h, _solve_single(p, h, -1, Ts, hi, Tw))
+            return _single_tp(p, h, _solve_single(p, h, _NK[0], Ts, hi, Tw))
         if near_c or h < 2.0e6:
-            recL, _, _, _ = _eval(p, Ts, True, nan)
+            recL, _, _, _ = _eval(p, Ts, _NL[1], nan)
             if h < recL[1] and not near_c:
-                return _single_tp(p, h, _solve_single(p, h, 1, lo, Ts, Tw))
-            recV, _, _, _ = _eval(p, Ts, False, nan)
+                return _single_tp(p, h, _solve_single(p, h, _NK[2], lo, Ts, Tw))
+            recV, _, _, _ = _eval(p, Ts, _NL[0], nan)
         else:
-            recV, _, _, _ = _eval(p, Ts, False, nan)
+            recV, _, _, _ = _eval(p, Ts, _NL[0], nan)
             if h > recV[1]:
-                return _single_tp(p, h, _solve_single(p, h, -1, Ts, hi, Tw))
-            recL, _, _, _ = _eval(p, Ts, True, nan)
+                return _single_tp(p, h, _solve_single(p, h, _NK[0], Ts, hi, Tw))
+            recL, _, _, _ = _eval(p, Ts, _NL[1], nan)
         _, dps = _psat_slope(Ts)
         dTs = 1.0 / dps
         hL = recL[1]
@@ -677,20 +689,20 @@ def _ph_branch(p, h, branch, Tw):
         return _ph_auto(p, h, Tw)
     Ts = _tsat(p)
     if branch == LIQUID:
-        r = _single_tp(p, h, _solve_single(p, h, 1, T_MIN, Ts + BRANCH_MARGIN_T, Tw))
+        r = _single_tp(p, h, _solve_single(p, h, _NK[2], T_MIN, Ts + BRANCH_MARGIN_T, Tw))
         if r[0][9] != 0:
             return _ph_auto(p, h, math.nan)
         return r
     if branch == VAPOUR:
         hi = T_MAX_R5 if p <= P_R5_MAX else T_25
         lo = max(Ts - BRANCH_MARGIN_T, T_MIN)
-        r = _single_tp(p, h, _solve_single(p, h, -1, lo, hi, Tw))
+        r = _single_tp(p, h, _solve_single(p, h, _NK[0], lo, hi, Tw))
         if r[0][9] != 0:
             return _ph_auto(p, h, math.nan)
         return r
     _, dps = _psat_slope(Ts)
-    recL, _, _, okL = _eval(p, Ts, True, math.nan)
-    recV, _, _, okV = _eval(p, Ts, False, math.nan)
+    recL, _, _, okL = _eval(p, Ts, _NL[1], math.nan)
+    recV, _, _, okV = _eval(p, Ts, _NL[0], math.nan)
     if not (okL and okV and recV[1] > recL[1]):
         return _ph_auto(p, h, math.nan)
     return _dome(p, h, Ts, 1.0 / dps, recL, recV), math.nan
@@ -732,12 +744,6 @@ def _store(r, i, T, rho, u, s, cp, x, dp, dh, region, status):
     dh[i] = r[7]
     region[i] = r[8]
     status[i] = r[9]
-
-
-@_njit
-def _ph_loop(p, h, T, rho, u, s, cp, x, dp, dh, region, status):
-    for i in range(p.size):
-        _store(ph_scalar(p[i], h[i]), i, T, rho, u, s, cp, x, dp, dh, region, status)
 
 
 @_njit
@@ -925,14 +931,16 @@ def ph_arrays(p, h, branch=None, memo=None) -> K.PhResult:
     if memo is not None:
         bf = np.zeros(n, dtype=np.int64) if branch is None else branch
         bf = np.ascontiguousarray(np.broadcast_to(np.asarray(bf, dtype=np.int64), shape).ravel())
+        bf = _read_only(bf)
         memo.computed = _ph_memo_loop(pf, hf, bf, *memo.arrays(n), *out)
-    elif branch is None:
-        _ph_loop(pf, hf, *out)
     else:
-        bf = np.ascontiguousarray(
-            np.broadcast_to(np.asarray(branch, dtype=np.int64), shape).ravel()
-        )
-        _ph_branch_loop(pf, hf, bf, *out)
+        # one loop for both: AUTO (0) is ph_scalar's path, so no second loop to compile;
+        # read-only branch codes always, one specialisation (see _read_only)
+        if branch is None:
+            bf = np.zeros(n, dtype=np.int64)
+        else:
+            bf = np.broadcast_to(np.asarray(branch, dtype=np.int64), shape).ravel()
+        _ph_branch_loop(pf, hf, _read_only(np.ascontiguousarray(bf)), *out)
     r.v = 1.0 / r.rho
     r.ok = r.status == 0
     if shape != (n,):

@@ -9,9 +9,10 @@ from dnasim.core.errors import PlantError
 from dnasim.media.base import BACKEND_ERRORS, Medium
 
 #: Backends accepted by :func:`get_medium` (case-insensitive).
-BACKENDS = ("IF97", "HEOS", "BICUBIC&HEOS", "TTSE&HEOS", "IdealGas", "NASA7")
+BACKENDS = ("IF97", "IF97-TABLES", "HEOS", "BICUBIC&HEOS", "TTSE&HEOS", "IdealGas", "NASA7")
 _BACKEND_KEYS = {b.lower(): b for b in BACKENDS}
 _BACKEND_KEYS.update({"ideal": "IdealGas", "ideal_gas": "IdealGas", "ideal-gas": "IdealGas"})
+_BACKEND_KEYS.update({"if97_tables": "IF97-TABLES", "if97tables": "IF97-TABLES"})
 
 _INSTANCES: dict[tuple[str, str], Medium] = {}
 _NAMES: dict[str, str] | None = None  # normalised spelling -> canonical CoolProp name
@@ -113,7 +114,9 @@ def get_medium(fluid: str, backend: str | None = None) -> Medium:
         FLUE_GAS_DEFAULT`) or ``"FlueGas[N2=0.72,CO2=0.13,H2O=0.11,O2=0.03,Ar=0.01]"``
         (mole fractions), both :class:`~dnasim.media.GasMixture` with backend ``"NASA7"``.
     backend : str, optional
-        ``"IF97"`` (water only), ``"HEOS"``, ``"BICUBIC&HEOS"``, ``"TTSE&HEOS"``
+        ``"IF97"`` (water only), ``"IF97-TABLES"`` (water only: bicubic spline tables
+        of IF97, :class:`~dnasim.media.if97_tables.TabulatedWater`), ``"HEOS"``,
+        ``"BICUBIC&HEOS"``, ``"TTSE&HEOS"``
         ``"IdealGas"`` (air only) or ``"NASA7"`` (gas mixtures only). Defaults:
         ``"IF97"`` for water,
         ``"IdealGas"`` for air (constant-cp ideal gas,
@@ -182,6 +185,14 @@ def _create(canon: str, backend: str) -> Medium:
         from dnasim.media.if97 import IF97Water
 
         return IF97Water()
+    if backend == "IF97-TABLES":
+        if canon != "Water":
+            raise PlantError(
+                f"backend 'IF97-TABLES' (tables of IAPWS-IF97) covers only water, not {canon!r}"
+            )
+        from dnasim.media.if97_tables import TabulatedWater
+
+        return TabulatedWater()
     if backend == "IdealGas":
         if canon != "Air":
             raise PlantError(

@@ -30,11 +30,9 @@ paragraph per problem; all problems found are reported together.
 
 from __future__ import annotations
 
-import inspect
 import math
 import re
-import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -119,297 +117,28 @@ class LoadedPlant:
         return simulate_plant(self.plant, self.simulation, **overrides)
 
 
-# --------------------------------------------------------------------------- errors
-
-
-class _LineIndex:
-    """Best-effort map (table path, key) -> line number, by scanning the TOML text."""
-
-    _HEADER = re.compile(r"^\s*\[\[?\s*(.+?)\s*\]\]?\s*(#.*)?$")
-    _KEY = re.compile(
-        r"^\s*((?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*')(?:\s*\.\s*(?:[A-Za-z0-9_-]+|\"[^\"]*\"|'[^']*'))*)\s*="
-    )
-    _INLINE_KEY = re.compile(r"[{,]\s*([A-Za-z0-9_-]+|\"[^\"]*\")\s*=")
-
-    def __init__(self, text: str):
-        self.map: dict[tuple[str, ...], int] = {}
-        table: tuple[str, ...] = ()
-        in_multiline = None
-        for lineno, line in enumerate(text.splitlines(), start=1):
-            if in_multiline:
-                if in_multiline in line:
-                    in_multiline = None
-                continue
-            m = self._HEADER.match(line)
-            if m and not self._KEY.match(line):
-                table = self._split(m.group(1))
-                self.map.setdefault(table, lineno)
-                continue
-            m = self._KEY.match(line)
-            if m:
-                path = table + self._split(m.group(1))
-                self.map.setdefault(path, lineno)
-                rest = line[m.end() :]
-                for q in ('"""', "'''"):
-                    if rest.count(q) == 1:
-                        in_multiline = q
-                if "{" in rest:
-                    for km in self._INLINE_KEY.finditer(rest):
-                        self.map.setdefault(path + (km.group(1).strip("\"'"),), lineno)
-
-    @staticmethod
-    def _split(dotted: str) -> tuple[str, ...]:
-        parts = re.findall(r"\"[^\"]*\"|'[^']*'|[^.\s]+", dotted)
-        return tuple(p.strip("\"'") for p in parts)
-
-    def find(self, table: Sequence[str], key: str | None) -> int | None:
-        path = tuple(table) + ((key,) if key is not None else ())
-        while path:
-            if path in self.map:
-                return self.map[path]
-            path = path[:-1]
-        return None
-
-
-# --------------------------------------------------------------------------- component metadata
-
-
-def _registry() -> dict[str, type]:
-    from dnasim.plant.plugins import registry
-
-    return registry()
-
-
-def _names(obj) -> list[str]:
-    """Port names from a list/tuple/dict of names or port objects."""
-    if obj is None:
-        return []
-    if isinstance(obj, Mapping):
-        return [str(k) for k in obj]
-    out = []
-    for p in obj:
-        out.append(p if isinstance(p, str) else str(getattr(p, "name", p)))
-    return out
-
-
-def _first_attr(cls, names):
-    for n in names:
-        v = getattr(cls, n, None)
-        if v is not None and not callable(v) or isinstance(v, list | tuple | dict):
-            return v
-    return None
-
-
-def fluid_ports(cls) -> list[str]:
-    return _names(_first_attr(cls, ("FLUID_PORTS", "PORTS", "fluid_ports", "ports")))
-
-
-def signal_inputs(cls) -> list[str]:
-    return _names(
-        _first_attr(cls, ("SIGNAL_INPUTS", "INPUTS", "signal_inputs", "inputs", "SIGNALS_IN"))
-    )
-
-
-def signal_outputs(cls) -> list[str]:
-    return _names(
-        _first_attr(cls, ("SIGNAL_OUTPUTS", "OUTPUTS", "signal_outputs", "outputs", "SIGNALS_OUT"))
-    )
-
-
-def params_of(cls) -> list:
-    return list(getattr(cls, "PARAMS", ()) or ())
-
-
-def _is_required(p) -> bool:
-    d = getattr(p, "default", None)
-    try:
-        from dnasim.library import REQUIRED
-    except ImportError:
-        REQUIRED = None  # noqa: N806
-    if REQUIRED is not None and d is REQUIRED:
-        return True
-    return type(d).__name__.upper().startswith("REQUIRED") or repr(d).upper() == "REQUIRED"
-
-
-def _port_info(ports) -> list[dict]:
-    out = []
-    for p in ports or ():
-        if isinstance(p, str):
-            out.append({"name": p, "role": "", "unit": "", "doc": ""})
-        else:
-            out.append(
-                {
-                    "name": str(getattr(p, "name", p)),
-                    "role": str(getattr(p, "role", "") or ""),
-                    "unit": str(getattr(p, "unit", "") or ""),
-                    "doc": str(getattr(p, "doc", "") or ""),
-                }
-            )
-    return out
-
-
-def _declared_equations(cls, params) -> list[str]:
-    """The equations a component declares (``Component.equations()`` of an example
-    instance: required numbers set to 1), one line each, "name[i]" for a vector
-    equation: "name [unit]: doc". Empty when no example can be built."""
-    required = {p["name"]: 1.0 for p in params if p["required"] and p["kind"] == "number"}
-    try:
-        eqs = cls("example", **required).equations()
-    except Exception:
-        return []
-    out = []
-    for e in eqs:
-        name = e.name if getattr(e, "size", None) is None else f"{e.name}[i]"
-        unit = f" [{e.unit}]" if e.unit else ""
-        out.append(f"{name}{unit}: {e.doc}".rstrip(": ") if e.doc else f"{name}{unit}")
-    return out
-
-
-def component_info(cls) -> dict:
-    """Ports, parameters (unit, default, range, doc) and equations of a component class.
-
-    The equations are those its docstring lists (the component library documents
-    them there); ``EQUATIONS`` on the class, if present, is used as well."""
-    params = []
-    for p in params_of(cls):
-        params.append(
-            {
-                "name": p.name,
-                "unit": param_unit(p),
-                "required": _is_required(p),
-                "default": None if _is_required(p) else getattr(p, "default", None),
-                "min": getattr(p, "min", None),
-                "max": getattr(p, "max", None),
-                "doc": getattr(p, "doc", "") or "",
-                "time_function": bool(getattr(p, "time_function", False)),
-                "kind": param_kind(p),
-                "choices": getattr(p, "choices", None),
-            }
-        )
-    eqs = getattr(cls, "EQUATIONS", None)
-    if eqs is None:
-        eqs = []
-    elif isinstance(eqs, str):
-        eqs = [e for e in eqs.strip().splitlines() if e.strip()]
-    if not eqs:
-        eqs = _declared_equations(cls, params)
-    fports, sins = fluid_ports(cls), signal_inputs(cls)
-    if not any(p["required"] for p in params):
-        # ports may depend on parameters (a Mixer's inlets): list the defaults' ports
-        try:
-            inst = cls("example")
-            fports, sins = _names(inst.fluid_ports()), _names(inst.signal_inputs())
-        except Exception:
-            pass
-    return {
-        "type": cls.__name__,
-        "doc": inspect.cleandoc(cls.__doc__ or ""),
-        "fluid_ports": fports,
-        "signal_inputs": sins,
-        "signal_outputs": signal_outputs(cls),
-        "fluid_port_info": _port_info(getattr(cls, "FLUID_PORTS", ())),
-        "signal_input_info": _port_info(getattr(cls, "SIGNAL_INPUTS", ())),
-        "signal_output_info": _port_info(getattr(cls, "SIGNAL_OUTPUTS", ())),
-        "params": params,
-        "equations": list(eqs),
-    }
-
-
-# --------------------------------------------------------------------------- reading
-
-
-def read_plant_file(path: str | Path) -> tuple[dict, str]:
-    """Read and decode a TOML file; malformed TOML becomes a ``PlantError`` with its line."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise PlantError(f"{path}: no such plant file") from None
-    except IsADirectoryError:
-        raise PlantError(f"{path}: is a directory, not a plant file") from None
-    except OSError as exc:
-        raise PlantError(f"{path}: cannot read the plant file: {exc.strerror or exc}") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line, col = _byte_line_column(raw, exc.start)
-        raise PlantError(
-            f"{path}, line {line}, column {col}: not a UTF-8 text file (byte "
-            f"0x{raw[exc.start]:02x}: {exc.reason}); save the plant file as UTF-8"
-        ) from None
-    return _decode(text, str(path)), text
-
-
-def _byte_line_column(raw: bytes, pos: int) -> tuple[int, int]:
-    """Line and column (in characters, both from 1) of byte ``pos`` of ``raw``."""
-    start = raw.rfind(b"\n", 0, pos) + 1
-    return raw.count(b"\n", 0, pos) + 1, len(raw[start:pos].decode("utf-8", "replace")) + 1
-
-
-#: nesting of arrays and inline tables that a plant file never needs
-DEEP_NESTING = 50
-
-
-def _deep_line(text: str, limit: int = DEEP_NESTING) -> int | None:
-    """The line where arrays and inline tables first nest ``limit`` deep (strings
-    and comments skipped), or None."""
-    depth, line, i, n = 0, 1, 0, len(text)
-    while i < n:
-        ch = text[i]
-        if ch == "\n":
-            line += 1
-        elif ch == "#":
-            j = text.find("\n", i)
-            i = n if j < 0 else j
-            continue
-        elif ch in "\"'":
-            q = text[i : i + 3] if text[i : i + 3] in ('"""', "'''") else ch
-            j = i + len(q)
-            while j < n and text[j : j + len(q)] != q:
-                if text[j] == "\\" and ch == '"':
-                    j += 1
-                elif text[j] == "\n":
-                    if len(q) == 1:
-                        break
-                    line += 1
-                j += 1
-            i = j + len(q)
-            continue
-        elif ch in "[{":
-            depth += 1
-            if depth >= limit:
-                return line
-        elif ch in "]}":
-            depth = max(0, depth - 1)
-        i += 1
-    return None
-
-
-def _decode(text: str, path: str) -> dict:
-    from dnasim.plant.migrations import migrate  # [plant] format, old keys (docs/plant_files.md)
-
-    try:
-        return migrate(tomllib.loads(text), path, text)
-    except RecursionError:
-        line = _deep_line(text)
-        where = f"{path}, line {line}" if line else path
-        raise PlantError(
-            f"{where}: malformed plant file: arrays or tables nested too deeply (a plant file "
-            "needs at most a few levels)"
-        ) from None
-    except tomllib.TOMLDecodeError as exc:
-        msg = str(exc)
-        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
-        why = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg).strip()
-        where = f"{path}"
-        if m:
-            where += f", line {m.group(1)}, column {m.group(2)}"
-        elif "end of document" in msg:
-            where += f", line {text.count(chr(10)) + 1}"
-        if "Cannot declare" in why or "Cannot overwrite" in why:
-            why += " (a name is used twice: each component table and each key may appear once)"
-        raise PlantError(f"{where}: malformed TOML: {why}") from None
-
+# --------------------------------------------------------------------------- parts
+# line index and reading (toml_reading), component metadata (component_info), the
+# network check (network_check): split out of this module, re-exported here
+from dnasim.plant.component_info import (  # noqa: E402
+    _is_required,
+    _names,
+    _registry,
+    component_info,
+    fluid_ports,
+    params_of,
+    signal_inputs,
+    signal_outputs,
+)
+from dnasim.plant.network_check import (  # noqa: E402
+    _network,
+    _port,
+)
+from dnasim.plant.toml_reading import (  # noqa: E402
+    _decode,
+    _LineIndex,
+    read_plant_file,
+)
 
 # --------------------------------------------------------------------------- validation
 
@@ -419,11 +148,6 @@ def _as_text(v, errors: Problems, table, key) -> str | None:
         errors.add(table, key, f"expected a string, got {type_name(v)} ({v!r})")
         return None
     return v
-
-
-def input_unit(cls, port) -> str:
-    """The unit a signal input expects; "*" for any unit."""
-    return str(getattr(port, "unit", "1") or "1")
 
 
 def _simulation(data, errors: Problems) -> SimulationSettings:
@@ -915,144 +639,6 @@ def _component(
                 f'add {inp} = "<component>.<output>" to inputs',
             )
     return spec
-
-
-def _network(specs: list[ComponentSpec], errors: Problems, broken: dict | None = None) -> None:
-    """Nodes with one port, signals from unknown components or outputs, signal
-    dimensions. ``broken``: raw tables of components already reported as invalid;
-    what follows only from their absence (their nodes, their outputs) is not
-    reported again."""
-    broken = broken or {}
-    broken_nodes = set()
-    for table in broken.values():
-        ports = table.get("ports") if isinstance(table, dict) else None
-        if isinstance(ports, dict):
-            broken_nodes.update(n for n in ports.values() if isinstance(n, str))
-    by_name = {c.name: c for c in specs}
-    node_members: dict[str, list[tuple[str, str]]] = {}
-    for c in specs:
-        for port, node in c.ports.items():
-            node_members.setdefault(node, []).append((c.name, port))
-    for node, members in node_members.items():
-        if node in by_name:
-            c, port = members[0]
-            errors.add(
-                ("components", c, "ports"),
-                port,
-                f"name used twice: '{node}' is both a component and a node; "
-                "give the node another name",
-            )
-        if len(members) == 1 and node not in broken_nodes:
-            c, port = members[0]
-            errors.add(
-                ("components", c, "ports"),
-                port,
-                f"unconnected port: node '{node}' has only {c}.{port}; every node joins at least "
-                "two ports (end a line with a boundary component)",
-            )
-    for c in specs:
-        for inp, src in c.inputs.items():
-            sub = ("components", c.name, "inputs")
-            comp, out = src.split(".")
-            other = by_name.get(comp)
-            if other is None and comp in node_members:
-                found = _signal_source(comp, out, None, True)
-                if isinstance(found, str):
-                    errors.add(sub, inp, found)
-                    continue
-                msg = _link_dimension_problem(c, inp, comp, out, found.unit)
-                if msg:
-                    errors.add(sub, inp, msg)
-                continue
-            if other is None:
-                if comp not in broken and comp not in broken_nodes:
-                    errors.add(
-                        sub,
-                        inp,
-                        f"no component named '{comp}' (and no node) for the signal source "
-                        f"'{src}', which must be a component's output or variable, or a "
-                        "node's p, h or T"
-                        f"{suggest(comp, list(by_name) + list(node_members))}",
-                    )
-                continue
-            outs = other.signal_outputs
-            if out in outs:
-                msg = _link_dimension_problem(c, inp, other, out)
-                if msg:
-                    errors.add(sub, inp, msg)
-                continue
-            if other.instance is not None:
-                found = _signal_source(comp, out, other.instance, False)
-                if not isinstance(found, str):
-                    msg = _link_dimension_problem(c, inp, comp, out, found.unit)
-                    if msg:
-                        errors.add(sub, inp, msg)
-                    continue
-                if out in other.fluid_ports:
-                    found = (
-                        f"'{src}' is a fluid port of {other.type}: a signal is a signal output, "
-                        f"a variable, or a node's p, h or T (write the node's name, e.g. "
-                        f"'<node>.p'); {found}"
-                    )
-                errors.add(sub, inp, found)
-                continue
-            if out in other.fluid_ports:
-                errors.add(
-                    sub,
-                    inp,
-                    f"'{src}' is a fluid port of {other.type}: a signal input must be linked "
-                    f"to a signal output, a variable or a node's p, h or T (outputs of {comp}: "
-                    f"{', '.join(outs) or 'none'})",
-                )
-            # otherwise: the source component's own parameters are in error (reported
-            # with it); whether it has this variable cannot be told without it
-
-
-def _signal_source(owner, ref, instance, is_node):
-    from dnasim.plant.signals import resolve
-
-    return resolve(owner, ref, instance, is_node)
-
-
-def _port(ports, name):
-    return next((q for q in ports or () if getattr(q, "name", None) == name), None)
-
-
-def _link_dimension_problem(dest: ComponentSpec, inp: str, src, out: str, have: str | None = None):
-    """Why the signal ``src.out`` cannot drive ``dest.inp`` (units of another dimension),
-    or None. ``src`` is a ComponentSpec, or a node name with ``have`` its unit.
-    Inputs with unit "*" take any signal."""
-    from dnasim.plant.signals import dimension_problem
-
-    q_in = _instance_port(dest, "signal_inputs", "SIGNAL_INPUTS", inp)
-    if q_in is None:
-        return None
-    src_name = src if isinstance(src, str) else src.name
-    if have is None:
-        q_out = _instance_port(src, "signal_outputs", "SIGNAL_OUTPUTS", out)
-        if q_out is None:
-            return None
-        have = str(getattr(q_out, "unit", "1") or "1")
-    return dimension_problem(
-        f"{src_name}.{out}",
-        have,
-        inp,
-        f"{dest.type} '{dest.name}'",
-        input_unit(dest.cls, q_in),
-        getattr(q_in, "doc", "") or "",
-    )
-
-
-def _instance_port(spec: ComponentSpec, method: str, attr: str, name: str):
-    """The port ``name``: from the built instance when there is one (ports and their
-    units may depend on parameters), else from the class."""
-    inst = spec.instance
-    if inst is not None and hasattr(inst, method):
-        try:
-            return _port(getattr(inst, method)(), name)
-        except Exception:  # a plugin's port method failing: fall back to the class
-            pass
-    return _port(getattr(spec.cls, attr, ()), name)
 
 
 def _plugin_imports(v, path, errors, allow_import: bool = False) -> list[str]:

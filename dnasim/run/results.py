@@ -5,7 +5,7 @@
     res.units["pipe1.T_out"]    # "K"
     list(res)                   # the output names, in System.output_names() order
     df = res.to_dataframe()     # index t [s], units in df.attrs["units"]
-    ds = res.to_xarray()        # dimension "t", units in each variable's attrs
+    ds = res.to_xarray()        # dimension "time", units in each variable's attrs
     res.at(42.0)["pipe1.T_out"] # linear between output points [K]
     res.interp([0, 10, 20])     # Results on those times
     res = read_results("results/attemperator")   # the same from a run's files
@@ -195,31 +195,32 @@ class Results(Mapping):
 
     # ------------------------------------------------------------- conversion
     def to_dataframe(self):
-        """A pandas DataFrame indexed by t [s], one column per name; the units are in
-        ``df.attrs["units"]`` (name -> unit, "t" -> "s") and the restart flags in
+        """A pandas DataFrame indexed by time [s] (named "time", as in results.csv,
+        results.nc and a sweep's sweep.nc), one column per name; the units are in
+        ``df.attrs["units"]`` (name -> unit, "time" -> "s") and the restart flags in
         ``df.attrs["restart"]`` (a tuple of bools over t: pandas compares the attrs of
         frames it merges or concatenates, which an array would break)."""
         import pandas as pd
 
         rows = self._rows()
-        df = pd.DataFrame({n: rows[n] for n in self.names}, index=pd.Index(self.t, name="t"))
-        df.attrs["units"] = {"t": "s", **{n: self.units.get(n, "") for n in self.names}}
+        df = pd.DataFrame({n: rows[n] for n in self.names}, index=pd.Index(self.t, name="time"))
+        df.attrs["units"] = {"time": "s", **{n: self.units.get(n, "") for n in self.names}}
         df.attrs["restart"] = tuple(bool(r) for r in self.restart)
         return df
 
     def to_xarray(self):
-        """An xarray Dataset with dimension "t" [s]; each variable's ``attrs["units"]``
-        holds its unit; ``restart`` is a boolean variable over t (CF flag attributes,
-        as in results.nc)."""
+        """An xarray Dataset with dimension "time" [s] (as in results.nc and sweep.nc);
+        each variable's ``attrs["units"]`` holds its unit; ``restart`` is a boolean
+        variable over time (CF flag attributes, as in results.nc)."""
         import xarray as xr
 
         rows = self._rows()
         data = {
-            n: xr.Variable(("t",), np.asarray(rows[n]), attrs={"units": self.units.get(n, "")})
+            n: xr.Variable(("time",), np.asarray(rows[n]), attrs={"units": self.units.get(n, "")})
             for n in self.names
         }
         data["restart"] = xr.Variable(
-            ("t",),
+            ("time",),
             self.restart,
             attrs={
                 "long_name": "row holds the state right after a restart at this time",
@@ -230,7 +231,7 @@ class Results(Mapping):
         )
         return xr.Dataset(
             data,
-            coords={"t": xr.Variable(("t",), self.t, attrs={"units": "s"})},
+            coords={"time": xr.Variable(("time",), self.t, attrs={"units": "s"})},
             attrs={"success": int(self.success), "message": self.message, "solver": self.solver},
         )
 

@@ -207,7 +207,7 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False, notes=
     after it.
     """
     from dnasim.run.backends import NordsieckBDF
-    from dnasim.run.simulation import problem_for
+    from dnasim.run.simulation import problem_for, solver_options
     from dnasim.start.initial import initial_values
 
     t0, t_end = sim.t_start, sim.t_end
@@ -223,26 +223,11 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False, notes=
         notes.extend(rest.notes)
     else:
         y0, yp0 = initial_values(system, t0, sim.start)
+    # the settings' solver, as simulate() builds it (simulation.solver_options);
+    # without dense output the rows go to the callback only: nothing grows with them
     solver = NordsieckBDF(
-        rtol=sim.rtol,
-        atol_scaled=sim.atol_scaled,
-        # Algebraic variables (flows, pressures, node enthalpies) are left out of the
-        # error test (DASPK's advice for index-1 problems; their error follows from the
-        # differential states'). A liquid volume's pressure-flow mode has a time
-        # constant V (drho/dp) / (dm/dp) ~ 1e-10 s: after a restart its flows jump
-        # within it (thermal expansion after an inlet-temperature step: 6e-4 kg/s), an
-        # "error" no h above 1e-10 s can pass, while below it the Newton iteration
-        # drowns in round-off (closed_form_water stopped at its 5 s step).
-        exclude_algebraic_from_error=True,
-        max_order=sim.max_order,
-        max_step=sim.max_step if sim.max_step is not None else math.inf,
-        dense_output=dense_output,
+        **solver_options(sim), dense_output=dense_output, keep_output=dense_output
     )
-    if getattr(sim, "max_steps", None) is not None:
-        solver.max_steps = int(sim.max_steps)
-    if not dense_output:
-        # rows go to the callback only: nothing grows with the rows
-        solver.keep_output = False
     t_eval = getattr(sim, "t_eval", None)
     problem = problem_for(
         system,

@@ -44,7 +44,27 @@ from dnasim.run.backends import IDA, SOLVER_OPTIONS, NordsieckBDF, Problem
 from dnasim.run.results import Results, strictly_increasing
 from dnasim.run.sinks import CSVSink, OutputRows
 
-__all__ = ["CSVSink", "IDA", "NordsieckBDF", "simulate", "simulation_keywords"]
+__all__ = [
+    "CSVSink",
+    "IDA",
+    "NordsieckBDF",
+    "simulate",
+    "simulation_keywords",
+    "solver_options",
+]
+
+
+def solver_options(settings) -> dict:
+    """The ``NordsieckBDF`` options of a plant file's ``SimulationSettings`` (rtol,
+    atol_scaled, max_order, and max_step, max_steps where given): the one mapping from
+    the settings to the solver, for ``simulate`` and ``dnasim run`` alike."""
+    kw = {"rtol": settings.rtol, "atol_scaled": settings.atol_scaled}
+    kw["max_order"] = settings.max_order
+    if settings.max_step is not None:
+        kw["max_step"] = settings.max_step
+    if settings.max_steps is not None:
+        kw["max_steps"] = int(settings.max_steps)
+    return kw
 
 
 def simulation_keywords(settings, t_end: float | None = None, **overrides):
@@ -62,9 +82,7 @@ def simulation_keywords(settings, t_end: float | None = None, **overrides):
     overrides replaces the file's output settings (both of them).
     """
     kw = {
-        "rtol": settings.rtol,
-        "atol_scaled": settings.atol_scaled,
-        "max_order": settings.max_order,
+        **solver_options(settings),
         "t0": settings.t_start,
         "start": settings.start,
         "output_interval": settings.output_interval,
@@ -72,10 +90,6 @@ def simulation_keywords(settings, t_end: float | None = None, **overrides):
     if getattr(settings, "t_eval", None) is not None:
         kw["t_eval"] = list(settings.t_eval)
         kw.pop("output_interval")
-    if settings.max_step is not None:
-        kw["max_step"] = settings.max_step
-    if settings.max_steps is not None:
-        kw["max_steps"] = settings.max_steps
     if overrides.get("solver") is not None:
         kw = {k: v for k, v in kw.items() if k not in SOLVER_OPTIONS}
     if overrides.get("t_eval") is not None or overrides.get("output_interval") is not None:

@@ -421,37 +421,15 @@ class Channel:
 
         def g(t, x, xp):
             mode = x.modes.get(self.phase_key)
-            out = np.ones(2 * n)
             if mode is None:
-                return out
-            pv = np.array(x[self.pv], dtype=float)
-            hv = np.array(x[self.hv], dtype=float)
-            hl, hvap = saturation_enthalpies(medium, pv)
-            near = (np.abs(hv - hl) < SWITCH_REFINE_BAND) | (np.abs(hv - hvap) < SWITCH_REFINE_BAND)
-            if near.any() and not self.mean:
-                M = np.asarray(x[self.M], dtype=float)[near]
-                U = np.asarray(x[self.U], dtype=float)[near]
-                pv[near], hv[near] = self._ph_from_MU(medium, M, U, pv[near], hv[near], mode[near])
-                hl, hvap = saturation_enthalpies(medium, pv)
-            sub = np.isfinite(hl)
-            liq, dome, vap = (mode == LIQUID) & sub, (mode == DOME) & sub, (mode == VAPOUR) & sub
-            lo = out[0::2]
-            hi = out[1::2]
-            lo[liq] = (hl - hv)[liq]  # liquid -> dome at h'
-            lo[dome] = (hv - hl)[dome]  # dome -> liquid at h'
-            hi[dome] = (hvap - hv)[dome]  # dome -> vapour at h''
-            hi[vap] = (hv - hvap)[vap]  # vapour -> dome at h
-            return out
+                return np.ones(2 * n)
+            M = U = None
+            if not self.mean:  # U = M u: (p, h) near a line recomputed from M and U
+                M, U = x[self.M], x[self.U]
+            return phase_switch_values(medium, mode, x[self.pv], x[self.hv], M, U, self.V_i)
 
         def action(t, x, xp, which):
-            mode = x.modes[self.phase_key].copy()
-            for k in np.atleast_1d(which):
-                i, line = divmod(int(k), 2)
-                if line == 0:
-                    mode[i] = DOME if mode[i] == LIQUID else LIQUID
-                else:
-                    mode[i] = DOME if mode[i] == VAPOUR else VAPOUR
-            x.modes[self.phase_key] = mode
+            x.modes[self.phase_key] = toggle_phase_modes(x.modes[self.phase_key], which)
 
         return Switch(
             f"{self.prefix}phase",
@@ -467,43 +445,15 @@ class Channel:
         )
 
     def _ph_from_MU(self, medium, M, U, p, h, mode):
-        """(p, h) [Pa, J/kg] of volumes on their mode's branch from their mass M [kg] and
-        internal energy U [J]: Newton on rho(p, h) = M/V_i, u(p, h) = U/M from (p, h).
-
-        Why the phase switch evaluates h this way near a line: between the ends of a
-        step the integrator's interpolant of the algebraic p_v, h_v is not consistent
-        with its interpolant of M, U, and the crossing located on h_v is off. Measured
-        on tests/field/condensing_pipe.toml: a volume switched to liquid at its crossing
-        located on h_v was, consistently with its M and U, 11 J/kg inside the liquid
-        region; the restart's consistent state jumped there, the flows of the liquid
-        column with it (-3.2 and +3.9 kg/s against 1 kg/s), and the volume crossed back
-        4e-7 s later. u = h - p/rho, so du/dp = -1/rho + p rho_p/rho^2 and
-        du/dh = 1 + p rho_h/rho^2."""
-        rho_target = M / self.V_i
-        u_target = U / np.where(M > 0.0, M, 1.0)
-        for _ in range(SWITCH_REFINE_ITERS):
-            st = medium.states(p, h, branch=mode, check=False)
-            rho, rp, rh = st.rho, st.drho_dp_h, st.drho_dh_p
-            up = -1.0 / rho + p * rp / rho**2
-            uh = 1.0 + p * rh / rho**2
-            f1 = rho - rho_target
-            f2 = st.u - u_target
-            det = rp * uh - rh * up
-            ok = np.isfinite(det) & (det != 0.0) & st.ok
-            dp = np.where(ok, (f1 * uh - rh * f2) / np.where(ok, det, 1.0), 0.0)
-            dh = np.where(ok, (rp * f2 - up * f1) / np.where(ok, det, 1.0), 0.0)
-            p, h = p - dp, h - dh
-        return p, h
+        """(p, h) of volumes from their M and U on their mode's branch (``ph_from_MU``)."""
+        return ph_from_MU(medium, self.V_i, M, U, p, h, mode)
 
     def init_phase_modes(self, medium, x) -> bool:
         """Set each volume's phase mode from its state (h < h': liquid, h > h'':
         vapour, else two-phase; supercritical: none). True when the modes changed."""
         if not self.phase_modes:
             return False
-        hv = np.asarray(x[self.hv], dtype=float)
-        hl, hvap = saturation_enthalpies(medium, np.asarray(x[self.pv], dtype=float))
-        mode = np.where(hv < hl, LIQUID, np.where(hv > hvap, VAPOUR, DOME))
-        mode = np.where(np.isfinite(hl), mode, AUTO).astype(np.int64)
+        mode = initial_phase_modes(medium, x[self.pv], x[self.hv])
         old = x.modes.get(self.phase_key)
         x.modes[self.phase_key] = mode
         return old is None or not np.array_equal(old, mode)
@@ -528,6 +478,87 @@ class Channel:
         x[self.U] = self.V_i * rho[1:-1] * (0.5 * (u_a + u[1:-1]) if self.mean else u[1:-1])
         x[self.Q] = 0.0
         return T[1:-1]
+
+
+def ph_from_MU(medium, V_i, M, U, p, h, mode):
+    """(p, h) [Pa, J/kg] of volumes on their mode's branch from their mass M [kg] and
+    internal energy U [J] in a volume V_i [m3]: Newton on rho(p, h) = M/V_i, u(p, h) = U/M
+    from (p, h).
+
+    Why the phase switch evaluates h this way near a line: between the ends of a
+    step the integrator's interpolant of the algebraic p_v, h_v is not consistent
+    with its interpolant of M, U, and the crossing located on h_v is off. Measured
+    on tests/field/condensing_pipe.toml: a volume switched to liquid at its crossing
+    located on h_v was, consistently with its M and U, 11 J/kg inside the liquid
+    region; the restart's consistent state jumped there, the flows of the liquid
+    column with it (-3.2 and +3.9 kg/s against 1 kg/s), and the volume crossed back
+    4e-7 s later. u = h - p/rho, so du/dp = -1/rho + p rho_p/rho^2 and
+    du/dh = 1 + p rho_h/rho^2."""
+    rho_target = M / V_i
+    u_target = U / np.where(M > 0.0, M, 1.0)
+    for _ in range(SWITCH_REFINE_ITERS):
+        st = medium.states(p, h, branch=mode, check=False)
+        rho, rp, rh = st.rho, st.drho_dp_h, st.drho_dh_p
+        up = -1.0 / rho + p * rp / rho**2
+        uh = 1.0 + p * rh / rho**2
+        f1 = rho - rho_target
+        f2 = st.u - u_target
+        det = rp * uh - rh * up
+        ok = np.isfinite(det) & (det != 0.0) & st.ok
+        dp = np.where(ok, (f1 * uh - rh * f2) / np.where(ok, det, 1.0), 0.0)
+        dh = np.where(ok, (rp * f2 - up * f1) / np.where(ok, det, 1.0), 0.0)
+        p, h = p - dp, h - dh
+    return p, h
+
+
+def phase_switch_values(medium, mode, pv, hv, M, U, V_i):
+    """The phase switch functions g (2n) of n volumes in their phase modes ``mode``
+    (module doc, "Phase modes"), at pressures pv [Pa] and enthalpies hv [J/kg]; where
+    hv is within ``SWITCH_REFINE_BAND`` of a line and the volumes' mass M [kg] and
+    internal energy U [J] are given (U = M u), (p, h) from M and U (``ph_from_MU``)."""
+    n = len(mode)
+    out = np.ones(2 * n)
+    pv = np.array(pv, dtype=float).reshape(n)
+    hv = np.array(hv, dtype=float).reshape(n)
+    hl, hvap = saturation_enthalpies(medium, pv)
+    near = (np.abs(hv - hl) < SWITCH_REFINE_BAND) | (np.abs(hv - hvap) < SWITCH_REFINE_BAND)
+    if near.any() and M is not None:
+        M = np.asarray(M, dtype=float).reshape(n)[near]
+        U = np.asarray(U, dtype=float).reshape(n)[near]
+        pv[near], hv[near] = ph_from_MU(medium, V_i, M, U, pv[near], hv[near], mode[near])
+        hl, hvap = saturation_enthalpies(medium, pv)
+    sub = np.isfinite(hl)
+    liq, dome, vap = (mode == LIQUID) & sub, (mode == DOME) & sub, (mode == VAPOUR) & sub
+    lo = out[0::2]
+    hi = out[1::2]
+    lo[liq] = (hl - hv)[liq]  # liquid -> dome at h'
+    lo[dome] = (hv - hl)[dome]  # dome -> liquid at h'
+    hi[dome] = (hvap - hv)[dome]  # dome -> vapour at h''
+    hi[vap] = (hv - hvap)[vap]  # vapour -> dome at h''
+    return out
+
+
+def toggle_phase_modes(mode, which):
+    """The modes after the crossings ``which`` (indices into the switch functions of
+    ``phase_switch_values``: 2i the saturated-liquid line of volume i, 2i + 1 its
+    saturated-vapour line) [a new array]."""
+    mode = np.array(mode, copy=True)
+    for k in np.atleast_1d(which):
+        i, line = divmod(int(k), 2)
+        if line == 0:
+            mode[i] = DOME if mode[i] == LIQUID else LIQUID
+        else:
+            mode[i] = DOME if mode[i] == VAPOUR else VAPOUR
+    return mode
+
+
+def initial_phase_modes(medium, pv, hv):
+    """Phase mode of each volume from its state: h < h' liquid, h > h'' vapour, else
+    two-phase; above the critical pressure none (AUTO)."""
+    hv = np.asarray(hv, dtype=float)
+    hl, hvap = saturation_enthalpies(medium, np.asarray(pv, dtype=float))
+    mode = np.where(hv < hl, LIQUID, np.where(hv > hvap, VAPOUR, DOME))
+    return np.where(np.isfinite(hl), mode, AUTO).astype(np.int64)
 
 
 class ChannelRows:
