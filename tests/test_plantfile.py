@@ -119,14 +119,14 @@ def test_base_file_is_valid_and_in_si():
 
 def test_t_eval_covers_the_interval():
     s = spec_of(BASE).simulation
-    t = s.t_eval()
+    t = s.output_times()
     assert t[0] == 0.0 and t[-1] == 1200.0 and len(t) == 601
 
 
 def test_defaults_without_optional_simulation_keys():
     text = BASE.replace('output_interval = "2 s"\n', "").replace("max_order = 4\n", "")
     s = spec_of(text).simulation
-    assert s.output_interval is None and s.t_eval() is None and s.max_order == 4
+    assert s.output_interval is None and s.output_times() is None and s.max_order == 4
 
 
 @pytest.mark.parametrize(

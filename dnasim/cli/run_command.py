@@ -309,12 +309,16 @@ def _run(
     dt = _parse_option_quantity(output_interval, "s", "--output-interval")
     if dt is not None:
         sim.output_interval = dt
+        sim.t_eval = None  # the option replaces the file's output times
     from dnasim.core.errors import DnasimError, OutputError, PlantError
 
     try:
         sim.check_output_points()
     except PlantError as exc:
-        src = "options --output-interval/--t-end" if (dt or x) else plant_file
+        if sim.t_eval is not None:  # the file's t_eval against --t-end
+            src = f"{plant_file} with option --t-end" if x is not None else plant_file
+        else:
+            src = "options --output-interval/--t-end" if (dt or x) else plant_file
         raise InputError(f"{src}: {exc}") from None
     patterns = _split_patterns(var_patterns)
     plot = plot or bool(patterns)

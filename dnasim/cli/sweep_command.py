@@ -135,6 +135,7 @@ def sweep_cmd(
 
             spec = copy.deepcopy(spec)
             spec.simulation.output_interval = dt
+            spec.simulation.t_eval = None  # the option replaces the file's output times
         check_output_sizes(spec, cases, dt)
     except CaseError as exc:
         src = "option --output-interval" if dt is not None else plant_file

@@ -395,6 +395,8 @@ def apply_case(spec, case: dict[str, Any]):
     sim_values = {k.partition(".")[2]: v for k, v in case.items() if k.startswith("simulation.")}
     if sim_values:
         raw = {k: v for k, v in asdict(new.simulation).items() if v is not None}
+        if "output_interval" in sim_values:
+            raw.pop("t_eval", None)  # a case's output interval replaces the file's times
         raw.update(sim_values)
         new.simulation = _simulation({"simulation": raw}, errors)
     for key, value in case.items():

@@ -84,6 +84,8 @@ SIMULATION_KEYS = {
     "t_end": "end time of the simulation [s] (required)",
     "t_start": "start time [s] (default 0)",
     "output_interval": "time between rows of results.csv [s] (default: every accepted step)",
+    "t_eval": 'the output times, a list such as ["0 s", "10 min", 1800] [s]: the rows are '
+    "exactly these times (not with output_interval)",
     "rtol": "relative error tolerance (default 1e-6)",
     "atol_scaled": "absolute error tolerance per unit of each variable's scale: "
     "atol_i = atol_scaled * max(nominal_i, |y0_i|) (default 1e-6)",
@@ -169,6 +171,7 @@ def _simulation(data, errors: Problems) -> SimulationSettings:
             )
     if "t_end" not in sim:
         errors.add(table, "t_end", 'missing: the end time of the simulation, e.g. t_end = "15 min"')
+    refused = set()
     for k in ("t_end", "t_start", "output_interval", "max_step"):
         if k in sim:
             x = quantity(sim[k], "s", errors, table, k)
@@ -178,13 +181,19 @@ def _simulation(data, errors: Problems) -> SimulationSettings:
                     errors.add(table, k, problem)
                 else:
                     setattr(s, k, x)
+            if x is None or problem:
+                refused.add(k)
+    times_ok = not refused & {"t_end", "t_start"}
     if "t_end" in sim and "t_start" in sim and s.t_end <= s.t_start:
         errors.add(table, "t_end", f"must be after t_start ({s.t_end:g} s <= {s.t_start:g} s)")
+        times_ok = False
     elif s.output_interval is not None:
         try:
             s.check_output_points()
         except PlantError as exc:
             errors.add(table, "output_interval", str(exc).removeprefix("[simulation] "))
+    if "t_eval" in sim:
+        _t_eval(sim, s, errors, table, times_ok)
     for k in ("rtol", "atol_scaled"):
         if k in sim:
             x = quantity(sim[k], "1", errors, table, k)
@@ -202,6 +211,56 @@ def _simulation(data, errors: Problems) -> SimulationSettings:
             else:
                 setattr(s, k, sim[k].lower() if k == "start" else sim[k])
     return s
+
+
+def _t_eval(sim, s: SimulationSettings, errors: Problems, table, times_ok: bool) -> None:
+    """``[simulation] t_eval``: a literal list of times (numbers in s or strings with a
+    unit), strictly increasing, within [t_start, t_end], not with output_interval.
+    ``times_ok``: t_start and t_end were read without a problem (else the range is not
+    checked, their own message stands)."""
+    from dnasim.core.units import convert_quantity
+    from dnasim.plant.spec import t_eval_problem
+
+    v = sim["t_eval"]
+    if not isinstance(v, list | tuple):  # a TOML array (a tuple: settings of a sweep case)
+        errors.add(
+            table,
+            "t_eval",
+            f'expected a list of times such as ["0 s", "10 min", 1800], got {type_name(v)}',
+        )
+        return
+    times, bad = [], False
+    for k, x in enumerate(v):
+        if isinstance(x, bool) or not isinstance(x, int | float | str):
+            errors.add(
+                table,
+                "t_eval",
+                f"t_eval[{k}]: expected a number [s] or a string with a unit such as "
+                f'"10 min", got {type_name(x)} ({x!r})',
+            )
+            bad = True
+            continue
+        try:
+            times.append(float(convert_quantity(x, "s")))
+        except UnitError as exc:
+            errors.add(table, "t_eval", f"t_eval[{k}] = {x!r}: {exc}")
+            bad = True
+    if bad:
+        return
+    if "output_interval" in sim:
+        errors.add(
+            table,
+            "t_eval",
+            "t_eval and output_interval are both given: the rows are either the times of "
+            "t_eval or a grid every output_interval; remove one of them",
+        )
+        return
+    problem = t_eval_problem(times, s.t_start if times_ok else -math.inf,
+                             s.t_end if times_ok else math.inf)  # fmt: skip
+    if problem:
+        errors.add(table, "t_eval", problem)
+        return
+    s.t_eval = tuple(times)
 
 
 _NAME_OK = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]*$")

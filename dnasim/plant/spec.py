@@ -27,6 +27,7 @@ __all__ = [
     "limit_message",
     "output_point_count",
     "setting_problem",
+    "t_eval_problem",
 ]
 
 
@@ -61,6 +62,33 @@ def setting_problem(name: str, x) -> str | None:
     raise KeyError(name)
 
 
+def t_eval_problem(times, t_start: float, t_end: float) -> str | None:
+    """What is wrong with the output times ``times`` [s] (``t_eval``: a sequence of SI
+    numbers), or None: the one statement of the rules, for the plant file's
+    ``[simulation] t_eval`` (``plantfile`` adds the file, table, key and line) and for
+    ``simulate(..., t_eval=...)``. They must be finite, strictly increasing and within
+    [t_start, t_end]; at most ``LIMITS["output_points"]`` of them."""
+    times = list(times)
+    if not times:
+        return "must hold at least one time"
+    if len(times) > LIMITS["output_points"]:
+        return f"holds {len(times)} times, above the limit of {LIMITS['output_points']:g} rows"
+    for k, x in enumerate(times):
+        if not math.isfinite(x):
+            return f"t_eval[{k}] = {x!r} is not a finite time"
+    for k in range(1, len(times)):
+        if not times[k] > times[k - 1]:
+            return (
+                f"must be strictly increasing: t_eval[{k}] = {times[k]:g} s follows "
+                f"t_eval[{k - 1}] = {times[k - 1]:g} s"
+            )
+    if times[0] < t_start:
+        return f"t_eval[0] = {times[0]:g} s is before t_start = {t_start:g} s"
+    if times[-1] > t_end:
+        return f"t_eval[{len(times) - 1}] = {times[-1]:g} s is after t_end = {t_end:g} s"
+    return None
+
+
 def output_point_count(t_start: float, t_end: float, interval: float) -> float:
     """Number of rows an output interval asks for (a float: it may be huge or inf)."""
     ratio = (t_end - t_start) / interval
@@ -76,6 +104,9 @@ class SimulationSettings:
     t_end: float = 100.0
     t_start: float = 0.0
     output_interval: float | None = None
+    #: the output times [s] (strictly increasing, within [t_start, t_end]); the rows are
+    #: exactly these times (``simulate``'s ``t_eval``); not with ``output_interval``
+    t_eval: tuple[float, ...] | None = None
     rtol: float = 1e-6
     atol_scaled: float = 1e-6  # atol_i = atol_scaled * max(nominal_i, |y0_i|)
     max_order: int = 4
@@ -84,14 +115,28 @@ class SimulationSettings:
     max_steps: int | None = None
 
     def output_points(self) -> float | None:
-        """How many rows ``output_interval`` asks for (None: every accepted step)."""
+        """How many rows ``t_eval`` or ``output_interval`` asks for (None: every
+        accepted step)."""
+        if self.t_eval is not None:
+            return float(len(self.t_eval))
         if self.output_interval is None:
             return None
         return output_point_count(self.t_start, self.t_end, self.output_interval)
 
     def check_output_points(self) -> None:
         """Raise ``PlantError`` when ``output_interval`` asks for more rows than
-        ``LIMITS["output_points"]`` (checked before any grid is built)."""
+        ``LIMITS["output_points"]`` (checked before any grid is built), or when
+        ``t_eval`` breaks ``t_eval_problem``'s rules or comes with ``output_interval``
+        (for a t_start or t_end changed after the file was read: ``--t-end``)."""
+        if self.t_eval is not None:
+            if self.output_interval is not None:
+                raise PlantError(
+                    "[simulation] t_eval and output_interval: give one of them, not both"
+                )
+            problem = t_eval_problem(self.t_eval, self.t_start, self.t_end)
+            if problem:
+                raise PlantError(f"[simulation] t_eval: {problem}")
+            return
         n = self.output_points()
         limit = LIMITS["output_points"]
         if n is not None and not n <= limit:
@@ -102,13 +147,17 @@ class SimulationSettings:
                 "a shorter t_end"
             )
 
-    def t_eval(self):
-        """Output times for ``output_interval`` (None: every accepted step); raises
-        ``PlantError`` above ``LIMITS["output_points"]`` rows."""
-        if self.output_interval is None:
-            return None
+    def output_times(self):
+        """The output times [s]: ``t_eval``, or the grid of ``output_interval`` closed
+        by t_end (None: every accepted step); raises ``PlantError`` above
+        ``LIMITS["output_points"]`` rows."""
         import numpy as np
 
+        if self.t_eval is not None:
+            self.check_output_points()
+            return np.array(self.t_eval, dtype=float)
+        if self.output_interval is None:
+            return None
         self.check_output_points()
         n = int(self.output_points()) - 1
         t = self.t_start + self.output_interval * np.arange(n + 1)

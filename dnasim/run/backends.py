@@ -128,7 +128,10 @@ class NordsieckBDF:
 class IDA:
     """SUNDIALS IDA through scikit-sundae (optional dependency), with the plant's
     semantics: it stops at every tstop and switch crossing, runs the switch's
-    action and re-initialises by dnasim's damped Newton."""
+    action and re-initialises by dnasim's damped Newton. It honours the problem's
+    output times (``t_eval``, ``output_interval``: IDA's own interpolation between its
+    steps, both sides of every restart) as ``NordsieckBDF`` does
+    (``dnasim.solver.ida.solve_ida``)."""
 
     rtol: float = RTOL
     atol_scaled: float = ATOL_SCALED
@@ -157,6 +160,7 @@ class IDA:
             events=pb.events,
             tstops=pb.tstops,
             t_eval=pb.t_eval,
+            output_interval=pb.output_interval,
             callback=pb.callback,
             max_num_steps=self.max_steps,
         )

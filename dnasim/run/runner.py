@@ -21,7 +21,7 @@ from typing import Any
 
 from dnasim.plant.plantinfo import describe_loaded, write_plant_json
 from dnasim.run.output import clear_results, write_events_csv, write_steps_csv
-from dnasim.run.sinks import RESTART_COLUMN, CSVSink, NetCDFSink, OutputRows
+from dnasim.run.sinks import RESTART_COLUMN, AtTimes, CSVSink, NetCDFSink, OutputRows
 
 __all__ = [
     "FORMATS",
@@ -121,6 +121,7 @@ def netcdf_attributes(loaded) -> dict:
         "t_start",
         "t_end",
         "output_interval",
+        "t_eval",
         "rtol",
         "atol_scaled",
         "max_order",
@@ -199,8 +200,11 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False, notes=
     no dense output (the Nordsieck pieces of every step), no ``Results``
     table, and ``sim.max_steps`` reaches ``solve_dae``. With ``output_interval`` the
     solver generates the grid as it goes and hands over both sides of every
-    discontinuity (two points at the same t); without it, every accepted step and,
-    after a restart, the state right after it.
+    discontinuity (two points at the same t); with ``t_eval`` the solver's points at
+    those times (both sides of a jump at one of them, the caller keeps the right one:
+    ``dnasim.run.sinks.AtTimes``) and at the restarts between them (dropped by the
+    caller); without either, every accepted step and, after a restart, the state right
+    after it.
     """
     from dnasim.run.backends import NordsieckBDF
     from dnasim.run.simulation import problem_for, solver_options
@@ -224,6 +228,7 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False, notes=
     solver = NordsieckBDF(
         **solver_options(sim), dense_output=dense_output, keep_output=dense_output
     )
+    t_eval = getattr(sim, "t_eval", None)
     problem = problem_for(
         system,
         t0,
@@ -232,6 +237,7 @@ def solve_streaming(system, sim, callback, *, dense_output: bool = False, notes=
         yp0,
         sim.atol_scaled,
         output_interval=sim.output_interval,
+        t_eval=t_eval,
         callback=callback,
     )
     return solver.solve(problem)
@@ -315,9 +321,16 @@ def run_plant(
     paths = [out / FORMATS[f] for f in formats]
     # without an output interval the rows are the accepted steps: their spacing is the
     # step size, kept (3 floats a step) for steps.csv in case the solver hands nothing over
-    rows_are_steps = sim.output_interval is None
+    t_eval = getattr(sim, "t_eval", None)
+    rows_are_steps = sim.output_interval is None and t_eval is None
 
     rows = OutputRows(system, sim.t_start, sim.t_end)
+    # with t_eval the rows are exactly its times (the right limit of a jump at one)
+    at_times = None if t_eval is None else AtTimes(t_eval, lambda t, _, row: put(t, row))
+
+    def put(t, row):
+        for sink in state["sinks"]:
+            sink.write(t, row)
 
     def write(t, y, yp):
         try:
@@ -338,8 +351,10 @@ def run_plant(
                     sink.open(rows.names, rows.units)
                 state["writer"] = sinks[0]
             row = rows.row(t, y, yp)
-            for sink in sinks:
-                sink.write(t, row)
+            if at_times is None:
+                put(t, row)
+            else:
+                at_times(t, row)
         except OutputError as exc:
             state["output_error"] = exc
             # a DAEError stops the solver, which then hands over its partial result
@@ -359,6 +374,11 @@ def run_plant(
     try:
         try:
             result = solve_streaming(system, sim, callback, dense_output=keep_rows, notes=notes)
+            if at_times is not None:
+                try:
+                    at_times.flush()  # the last row
+                except OutputError as exc:
+                    state["output_error"] = exc
             success = bool(getattr(result, "success", True))
             if not success:
                 status = "failed"

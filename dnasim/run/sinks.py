@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-__all__ = ["CSVSink", "NetCDFSink", "OutputRows", "RESTART_COLUMN", "netcdf_layout"]
+__all__ = ["AtTimes", "CSVSink", "NetCDFSink", "OutputRows", "RESTART_COLUMN", "netcdf_layout"]
 
 #: last output column: 1 on the row of the state right after a discontinuity (the
 #: row before it, at the same time, holds the left limit), else 0 [-]
@@ -55,6 +55,41 @@ class OutputRows:
         values = self.system.output_row(t_row, y, yp)
         self.prev_t = float(t)
         return np.append(values, float(restart))
+
+
+class AtTimes:
+    """The output points at the times ``times`` [s] only (``t_eval`` followed
+    literally): of the points the solver hands over at one time (both sides of a
+    discontinuity there) the last, the state right after it (the right limit), and
+    none at other times (the restarts the solver adds between them, at switches and
+    time events). ``emit(t, restart, *payload)`` gets each kept point one point late
+    (the next point says whether a later one at the same time follows), with
+    ``restart`` True when it replaced an earlier point at its time; ``flush()`` hands
+    over the last one. Whatever ``payload`` holds must not change afterwards (copy the
+    solver's arrays)."""
+
+    def __init__(self, times, emit):
+        self.times = frozenset(float(t) for t in times)
+        self.emit = emit
+        self.held = None  # (t, restart, *payload) waiting for the next point
+
+    def __call__(self, t, *payload) -> None:
+        t = float(t)
+        held = self.held
+        restart = False
+        if held is not None:
+            if held[0] == t:
+                restart = True
+            else:
+                self.held = None
+                self.emit(*held)
+        if t in self.times:
+            self.held = (t, restart, *payload)
+
+    def flush(self) -> None:
+        held, self.held = self.held, None
+        if held is not None:
+            self.emit(*held)
 
 
 class CSVSink:
@@ -429,11 +464,15 @@ class NetCDFSink:
             return
         main, left = [], []
         prev_t = self._prev_t
+        rc = self.names.index(RESTART_COLUMN) if RESTART_COLUMN in self.names else None
         for k in range(n):
             t, row = pending[k]
             nxt = pending[k + 1][0] if k + 1 < len(pending) else None
-            # both sides of a jump: the row before (same time as the next) is the left limit
-            (left if nxt == t else main).append((t, row, prev_t == t))
+            # both sides of a jump: the row before (same time as the next) is the left limit;
+            # the row after it is flagged, as is a row whose restart column says so (with
+            # t_eval only the right limit is handed over: ``AtTimes``)
+            flag = prev_t == t or (rc is not None and row[rc] == 1.0)
+            (left if nxt == t else main).append((t, row, flag))
             prev_t = t
         with _signals_blocked():
             try:
@@ -599,9 +638,14 @@ def _version() -> str:
 
 def _attr_value(v):
     """A netCDF attribute value: numbers and strings as they are, None as "",
-    booleans as 0/1, anything else as its text."""
+    booleans as 0/1, a sequence of numbers (``t_eval``) as a float array, anything
+    else as its text."""
     if v is None:
         return ""
+    if isinstance(v, tuple | list | np.ndarray) and all(
+        isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool) for x in v
+    ):
+        return np.asarray(v, dtype=float)
     if isinstance(v, bool | np.bool_):
         return int(v)
     if isinstance(v, int | float | str | np.integer | np.floating):

@@ -43,7 +43,20 @@ def solve_ida(
     callback=None,
     linsolver=None,
     max_num_steps=100000,
+    output_interval=None,
 ):
+    """Integrate F(t, y, y') = 0 with IDA from t_span[0] to t_span[1]; returns a
+    ``DAEResult``.
+
+    Output points, as ``solve_dae``'s: ``t_eval`` (times [s], increasing, within
+    t_span) or ``output_interval`` [s] (t0, t0 + dt, ..., t_end, generated as the run
+    goes), not both; the values at an output time inside a step are IDA's own
+    interpolation (IDAGetDky, through IDASolve in IDA_NORMAL mode: the step sequence is
+    the one without output times). With output times both sides of every restart
+    (tstop, switch) are output points too (two points at the same t, the state before
+    and after). Without: every accepted step, and after a restart the state right
+    after it at the same t. ``callback(t, y, yp)`` gets every output point in order.
+    """
     try:
         from sksundae.ida import IDA
     except ImportError:
@@ -137,11 +150,47 @@ def solve_ida(
             opts["num_events"] = n_events
         return IDA(resfn, **opts)
 
-    ts, ys, yps, log, hist = [t0], [np.array(y0, float)], [np.array(yp0, float)], [], []
-    if callback:
-        callback(t0, ys[0], yps[0])
-    stops = sorted(s for s in tstops if t0 < s < t_end) + [t_end]
+    from dnasim.core.errors import DAEError
+    from dnasim.solver.output import OutputGrid
+
+    if t_eval is not None:
+        t_eval = np.asarray(t_eval, dtype=float).ravel()
+        if t_eval.size == 0 or not np.all(np.isfinite(t_eval)) or np.any(np.diff(t_eval) < 0):
+            raise DAEError("t_eval must be a non-empty, increasing sequence of finite times.")
+        if t_eval[0] < t0 or t_eval[-1] > t_end:
+            raise DAEError(f"t_eval must lie within t_span [{t0}, {t_end}].")
+        if output_interval is not None:
+            raise DAEError("give t_eval or output_interval, not both.")
+    if output_interval is not None and not (np.isfinite(output_interval) and output_interval > 0):
+        raise DAEError(f"output_interval must be a positive number; got {output_interval!r}.")
+    grid = OutputGrid.of(t_eval, output_interval, t0, t_end)
+    ts, ys, yps, log, hist = [], [], [], [], []
+
+    def emit(t_out, y_out, yp_out):
+        ts.append(t_out)
+        ys.append(np.array(y_out, float))
+        yps.append(np.array(yp_out, float))
+        if callback:
+            callback(t_out, ys[-1], yps[-1])
+
+    def interpolated(t_out):
+        """(y, yp) at t_out inside IDA's last step: IDASolve in IDA_NORMAL mode, which
+        interpolates there without stepping. Right after a root return IDA hands that
+        root over once more first (its close-root check), so it is asked again."""
+        for _ in range(3):
+            r = solver.step(t_out, method="normal", tstop=None)
+            if r.success and float(np.atleast_1d(r.t)[-1]) == t_out:
+                return to_y(np.array(r.y).reshape(-1)[-n:]), to_y(np.array(r.yp).reshape(-1)[-n:])
+        raise DAEError(f"IDA could not interpolate its solution at the output time t = {t_out} s")
+
     t, y, yp = t0, np.array(y0, float), np.array(yp0, float)
+    if grid is None:
+        emit(t, y, yp)
+    else:
+        while grid.peek() is not None and grid.peek() <= t:
+            emit(grid.peek(), y, yp)
+            grid.advance()
+    stops = sorted(s for s in tstops if t0 < s < t_end) + [t_end]
     solver = make(False)
     solver.init_step(t, y[cols], yp[cols])
     success, message = True, "reached t_end"
@@ -153,17 +202,32 @@ def solve_ida(
             success, message = False, res.message
             break
         t_new = float(np.atleast_1d(res.t)[-1])
+        if t_new <= t:
+            # after an interpolation IDA first hands its last step's end over again
+            continue
         u = np.array(res.y).reshape(-1)[-n:] if np.ndim(res.y) == 1 else np.array(res.y)[-1]
         up = np.array(res.yp).reshape(-1)[-n:] if np.ndim(res.yp) == 1 else np.array(res.yp)[-1]
         y, yp = to_y(u), to_y(up)
         hist.append((t_new, t_new - t, 0))
         t = t_new
         stats["steps"] += 1
-        ts.append(t)
-        ys.append(y.copy())
-        yps.append(yp.copy())
-        if callback:
-            callback(t, y, yp)
+        if grid is None:
+            emit(t, y, yp)
+        else:
+            while grid.peek() is not None and grid.peek() <= t:
+                t_out = grid.peek()
+                if t_out == t:
+                    emit(t, y, yp)
+                else:
+                    try:
+                        emit(t_out, *interpolated(t_out))
+                    except DAEError as exc:
+                        success, message = False, str(exc)
+                        break
+                grid.advance()
+            if not success:
+                break
+        y_left, yp_left = y.copy(), yp.copy()  # the state before a jump at t
         fired = res.i_events is not None and np.any(np.asarray(res.i_events) != 0)
         at_stop = abs(t - stop) <= 1e-10 * max(1.0, abs(stop))
         if fired:
@@ -186,14 +250,17 @@ def solve_ida(
         if fired or (at_stop and stop < t_end):
             # consistent values after the jump, keeping the differential variables
             stats["restarts"] += 1
+            if grid is not None and (not ts or ts[-1] != t):
+                emit(t, y_left, yp_left)  # both sides of the jump are output points
             y, yp = reinitialise(t, y, yp)
+            emit(t, y, yp)  # the state right after it, at the same t
             solver = make(False)
             solver.init_step(t, y[cols], yp[cols])
     stats["residual_evals"] = counter[0]
     return DAEResult(
         t=np.array(ts),
-        y=np.array(ys).T,
-        yp=np.array(yps).T,
+        y=np.array(ys).reshape(-1, n).T,
+        yp=np.array(yps).reshape(-1, n).T,
         success=success,
         status=0 if success else -1,
         message=message,

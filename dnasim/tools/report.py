@@ -485,7 +485,10 @@ def render_report(outcome, loaded, out_dir, *, units: str = "si") -> str:
         for k in ("rtol", "atol_scaled", "max_order", "output_interval", "start"):
             if hasattr(sim, k):
                 v = getattr(sim, k)
-                if k == "output_interval":
+                if k == "output_interval" and getattr(sim, "t_eval", None) is not None:
+                    te = sim.t_eval  # the rows are exactly these times
+                    k, v = "t_eval [s]", f"{len(te)} times, {te[0]:g} to {te[-1]:g}"
+                elif k == "output_interval":
                     k, v = "output_interval [s]", "every accepted step" if v is None else v
                 run_rows.append((k, _fmt(v)))
     parts.append("<div class='grid'>")

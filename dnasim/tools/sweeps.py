@@ -465,6 +465,8 @@ def _case_settings(spec, case):
     if not values:
         return spec.simulation
     raw = {k: v for k, v in asdict(spec.simulation).items() if v is not None}
+    if "output_interval" in values:
+        raw.pop("t_eval", None)  # a case's output interval replaces the file's times
     raw.update(values)
     errors = Problems(str(spec.path), None)
     sim = _simulation({"simulation": raw}, errors)
@@ -552,6 +554,7 @@ def sweep(
 
         spec = copy.deepcopy(spec)
         spec.simulation.output_interval = float(output_interval)
+        spec.simulation.t_eval = None  # replaced by the interval
     check_output_sizes(spec, cases, output_interval)
     fingerprint = plant_fingerprint(spec)
     out = Path(out_dir) if out_dir is not None else Path(tempfile.mkdtemp(prefix="dnasim-sweep-"))
@@ -672,6 +675,8 @@ def _grid(spec, records, output_interval):
     ends = [r.get("t_end") for r in records if r and np.isfinite(r.get("t_end", math.nan))]
     t1 = max(ends) if ends else spec.simulation.t_end
     dt = output_interval if output_interval is not None else spec.simulation.output_interval
+    if dt is None and output_interval is None and spec.simulation.t_eval is not None:
+        return np.array(spec.simulation.t_eval, dtype=float)  # the file's output times
     if dt is None:
         return np.linspace(t0, t1, DEFAULT_GRID_POINTS)
     n = int(math.floor((t1 - t0) / dt + 1e-9))
@@ -702,6 +707,7 @@ def collect(spec, cases, out_dir, *, output_interval=None, fingerprint=None):
 
             spec = copy.deepcopy(spec)
             spec.simulation.output_interval = float(output_interval)
+        spec.simulation.t_eval = None  # replaced by the interval
         fingerprint = plant_fingerprint(spec)
     keys = list(dict.fromkeys(k for c in cases for k in c))
     punits = case_units(spec, keys)
