@@ -15,7 +15,7 @@ from typing import Any
 
 from dnasim.core.errors import PlantError, Problems
 from dnasim.core.units import STANDARD_ATMOSPHERE
-from dnasim.core.values import LIMITS, limit_message
+from dnasim.core.values import LIMITS, limit_message, t_eval_problem
 
 __all__ = [
     "LIMITS",
@@ -60,33 +60,6 @@ def setting_problem(name: str, x) -> str | None:
             return f'expected "steady" or "given", got {x!r}'
         return None
     raise KeyError(name)
-
-
-def t_eval_problem(times, t_start: float, t_end: float) -> str | None:
-    """What is wrong with the output times ``times`` [s] (``t_eval``: a sequence of SI
-    numbers), or None: the one statement of the rules, for the plant file's
-    ``[simulation] t_eval`` (``plantfile`` adds the file, table, key and line) and for
-    ``simulate(..., t_eval=...)``. They must be finite, strictly increasing and within
-    [t_start, t_end]; at most ``LIMITS["output_points"]`` of them."""
-    times = list(times)
-    if not times:
-        return "must hold at least one time"
-    if len(times) > LIMITS["output_points"]:
-        return f"holds {len(times)} times, above the limit of {LIMITS['output_points']:g} rows"
-    for k, x in enumerate(times):
-        if not math.isfinite(x):
-            return f"t_eval[{k}] = {x!r} is not a finite time"
-    for k in range(1, len(times)):
-        if not times[k] > times[k - 1]:
-            return (
-                f"must be strictly increasing: t_eval[{k}] = {times[k]:g} s follows "
-                f"t_eval[{k - 1}] = {times[k - 1]:g} s"
-            )
-    if times[0] < t_start:
-        return f"t_eval[0] = {times[0]:g} s is before t_start = {t_start:g} s"
-    if times[-1] > t_end:
-        return f"t_eval[{len(times) - 1}] = {times[-1]:g} s is after t_end = {t_end:g} s"
-    return None
 
 
 def output_point_count(t_start: float, t_end: float, interval: float) -> float:

@@ -21,6 +21,7 @@ from typing import Any
 
 from dnasim.plant.plantinfo import describe_loaded, write_plant_json
 from dnasim.run.output import clear_results, write_events_csv, write_steps_csv
+from dnasim.run.progress import Progress as _Progress
 from dnasim.run.sinks import RESTART_COLUMN, AtTimes, CSVSink, NetCDFSink, OutputRows
 
 __all__ = [
@@ -148,43 +149,6 @@ def plant_output_layout(system) -> tuple[list[str], dict[str, str], Any]:
 
 
 # --------------------------------------------------------------------------- run
-
-
-class _Progress:
-    def __init__(self, t0: float, t1: float, enabled: bool):
-        self.enabled = enabled
-        self.t0, self.t1 = t0, t1
-        self.bar = None
-        self.done = 0
-        if enabled:
-            import sys
-
-            import click
-
-            self.bar = click.progressbar(
-                file=sys.stderr,  # one line, redrawn; stdout keeps the summary
-                length=1000,
-                label="simulating",
-                show_eta=True,
-                show_percent=True,
-                width=30,
-                item_show_func=lambda t: None if t is None else f"t = {t:.6g} s",
-            )
-            self.bar.__enter__()
-
-    def update(self, t: float) -> None:
-        if self.bar is None:
-            return
-        frac = (t - self.t0) / (self.t1 - self.t0) if self.t1 > self.t0 else 1.0
-        n = int(max(0.0, min(1.0, frac)) * 1000)
-        if n > self.done:
-            self.bar.update(n - self.done, current_item=t)
-            self.done = n
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.__exit__(None, None, None)
-            self.bar = None
 
 
 def solve_streaming(system, sim, callback, *, dense_output: bool = False, notes=None):

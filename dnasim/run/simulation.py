@@ -231,7 +231,7 @@ def simulate(
         reinitialise=partial(reinitialise, system),
     )
     if progress:
-        from dnasim.run.runner import _Progress
+        from dnasim.run.progress import Progress as _Progress
 
         bar = _Progress(t0, t_end, True)
     t_start = time.perf_counter()
@@ -263,8 +263,8 @@ def simulate(
 
 def _checked_t_eval(t_eval, t0: float, t_end: float) -> np.ndarray:
     """``t_eval`` as a float array [s], or ``PlantError`` naming what is wrong with it
-    (``dnasim.plant.spec.t_eval_problem``: finite, strictly increasing, in [t0, t_end])."""
-    from dnasim.plant.spec import t_eval_problem
+    (``dnasim.core.values.t_eval_problem``: finite, strictly increasing, in [t0, t_end])."""
+    from dnasim.core.values import t_eval_problem
 
     try:
         times = np.array(t_eval, dtype=float).ravel()
