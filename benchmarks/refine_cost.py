@@ -9,16 +9,17 @@ seconds after t_start as in bit_identity_csv.py) in four ways:
 - ``off``: no refinement (the interpolated points; ``refine_output`` off);
 - ``prev``: the refinement as first committed (the convergence test on all unknowns,
   the algebraic y and the differential y' together, from the interpolated point:
-  ``refine.ALGEBRAIC_TEST = WARM_START = False``);
+  ``refine.ALGEBRAIC_TEST = WARM_START = SPLICE = False``);
 - ``new``: the current defaults (``refine.ALGEBRAIC_TEST``: the test on the algebraic y
-  alone where the matrix is block triangular; ``refine.WARM_START``);
+  alone where the matrix is block triangular; ``refine.WARM_START``, ``refine.SPLICE``);
 - ``ref``: the reference, refinement at maximum effort: every output point between
   steps solved (no skip), a fresh Jacobian at every point, converged to 1e-3 of the
   tolerance in up to 12 iterations.
 
 Printed per plant and way: residual evaluations, Jacobians (the solver's counter,
 ``jac_evals``, does not count the refiner's: its Jacobians are counted here as
-``ref.Jacs``), CPU seconds (``time.process_time``, the run with its start; the machine
+``ref.Jacs``; ``splice``: the kept matrices given the integrator's algebraic columns
+instead), CPU seconds (``time.process_time``, the run with its start; the machine
 is shared, repeat for ratios), the output points between steps solved, and the largest
 deviation of any output point's algebraic variables from the reference in units of
 their tolerance, max_i |y_i - y_ref,i| / (rtol |y_ref,i| + atol_i) (``dev alg``; the
@@ -91,6 +92,7 @@ def run_way(path: Path, t_end_cut: float, way: str) -> dict:
         if way == "prev":
             stack.enter_context(_patched(refine, "ALGEBRAIC_TEST", False))
             stack.enter_context(_patched(refine, "WARM_START", False))
+            stack.enter_context(_patched(refine, "SPLICE", False))
         if way == "ref":
             stack.enter_context(_patched(driver, "REFINE_SKIP_BELOW", -np.inf))
             stack.enter_context(_patched(refine, "CONVERGED", 1e-3 * refine.CONVERGED))
@@ -114,6 +116,7 @@ def run_way(path: Path, t_end_cut: float, way: str) -> dict:
         "jac_evals": int(stats.get("jac_evals", -1)),
         "refiner_jacs": info["refiner_jacs"],
         "solves": int(stats.get("output_solves", 0)),
+        "splices": 0 if d._refiner is None else d._refiner.stats_spliced,
         "cpu": cpu,
         "status": outcome.status,
     }
@@ -144,7 +147,7 @@ def main(argv=None) -> int:
     paths = [Path(p) for p in args.plants] or sorted((ROOT / "plants").glob("*.toml"))
     print(
         f"{'plant':<30} {'way':<4} {'steps':>6} {'res.evals':>9} {'Jacs':>5} {'ref.Jacs':>8} "
-        f"{'solves':>6} {'CPU s':>6} {'dev alg':>9} {'dev yp':>9}"
+        f"{'solves':>6} {'splice':>6} {'CPU s':>6} {'dev alg':>9} {'dev yp':>9}"
     )
     for p in paths:
         runs = {w: run_way(p, args.t_end, w) for w in WAYS}
@@ -153,7 +156,8 @@ def main(argv=None) -> int:
             dy, dp = deviation(r, runs["ref"])
             print(
                 f"{p.name:<30} {w:<4} {r['steps']:>6} {r['residual_evals']:>9} "
-                f"{r['jac_evals']:>5} {r['refiner_jacs']:>8} {r['solves']:>6} {r['cpu']:>6.2f} "
+                f"{r['jac_evals']:>5} {r['refiner_jacs']:>8} {r['solves']:>6} "
+                f"{r['splices']:>6} {r['cpu']:>6.2f} "
                 f"{dy:>9.3g} {dp:>9.3g}"
             )
         sys.stdout.flush()

@@ -265,3 +265,38 @@ def test_the_full_test_where_an_algebraic_row_reads_a_derivative(monkeypatch):
     # at the points, the polynomial's x' at steps); m off m(x) by 0.040 of its tolerance
     # (measured), as in the block-triangular run: 0.1 with margin
     assert _m_error(res) < 0.1
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_splice_takes_the_integrators_algebraic_columns(sparse):
+    """``AlgebraicRefiner._splice``: the kept matrix with the columns of the algebraic
+    y from the integrator's newer matrix (they are dF/dy_a in both), the y' columns
+    kept; once per integrator matrix."""
+    import scipy.sparse
+
+    from dnasim.solver.linear_algebra import IterationMatrix
+    from dnasim.solver.residual import SolverStats
+
+    n = 3
+    pattern = np.ones((n, n)) if sparse else None
+    algebraic = np.array([False, True, True])
+
+    def matrix():
+        return IterationMatrix(_tank_and_switch, n, sparsity=pattern)
+
+    own, integrators = matrix(), matrix()
+    kept = np.arange(1.0, 10.0).reshape(n, n) + 10.0 * np.eye(n)
+    newer = -kept
+    as_matrix = scipy.sparse.csc_matrix if sparse else np.array
+    own.matrix, integrators.matrix = as_matrix(kept), as_matrix(newer)
+    r = refine.AlgebraicRefiner(
+        _tank_and_switch, algebraic, 1e-6, 1e-8, own, None, None, SolverStats(), source=integrators
+    )
+    r.kept = True
+    assert r._splice()
+    got = own.matrix.toarray() if sparse else own.matrix
+    np.testing.assert_array_equal(got[:, 0], kept[:, 0])
+    np.testing.assert_array_equal(got[:, 1:], newer[:, 1:])
+    assert not r._splice()  # the same integrator matrix: not newer
+    integrators.matrix = as_matrix(2.0 * newer)
+    assert r._splice()

@@ -181,6 +181,7 @@ class Driver:
                 self.problem.names,
                 self.problem.equation_names,
                 self.stats,
+                source=m,
             )
         try:
             y_new, yp_new = self._refiner(t, y, yp, solver.h_used, step=self.stats.steps)

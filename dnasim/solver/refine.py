@@ -53,6 +53,7 @@ line rather than from the last correction: drum_boiler 1896 -> 1633, msl_drum_bo
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse
 
 from dnasim.core.errors import DAEError, ResidualDomainError
 from dnasim.solver.initial import solve_consistent
@@ -71,6 +72,8 @@ WARM_START = True
 EXTRAPOLATE = True
 #: the convergence test on the algebraic y alone where the matrix is block triangular
 ALGEBRAIC_TEST = True
+#: when the kept matrix fails: its algebraic columns from the integrator's newer matrix
+SPLICE = True
 
 
 def rate_factor(rate: float) -> float:
@@ -88,7 +91,9 @@ class AlgebraicRefiner:
     ``matrix``: an ``IterationMatrix`` of its own (its colouring; the integrator's
     matrix and LU are never touched, so the steps do not depend on the output)."""
 
-    def __init__(self, F, algebraic, rtol, atol, matrix: IterationMatrix, names, eq_names, stats):
+    def __init__(
+        self, F, algebraic, rtol, atol, matrix: IterationMatrix, names, eq_names, stats, source=None
+    ):
         self.F = F
         self.unknown_y = np.asarray(algebraic, dtype=bool)
         self.ymask = self.unknown_y.astype(float)
@@ -104,6 +109,12 @@ class AlgebraicRefiner:
         self.alg = np.flatnonzero(self.unknown_y)
         self.block = False  # the kept matrix is block triangular (``_block_triangular``)
         self.warm = WARM_START
+        # the integrator's IterationMatrix (its algebraic columns are dF/dy_a, whatever
+        # its cj: ``_spliced``), and the matrix of it last spliced in
+        self.source = source if SPLICE and source is not None and source.jac is None else None
+        self.spliced_from = None
+        self._alg_entries = None  # the pattern's entries in algebraic columns
+        self.stats_spliced = 0
 
     def __call__(self, t, y, yp, h, step=None):
         result = None
@@ -135,9 +146,13 @@ class AlgebraicRefiner:
         return dy2 + r * (dy2 - dy1), dyp2 + r * (dyp2 - dyp1)
 
     def _solve(self, t, y, yp, h):
-        for fresh in (False, True) if self.kept else (True,):
+        """From the interpolated point: with the kept matrix, then (``SPLICE``) with it
+        and the integrator's newer algebraic columns, then with a fresh one."""
+        for how in ("kept", "spliced", "fresh") if self.kept else ("fresh",):
+            if how == "spliced" and not self._splice():
+                continue
             try:
-                result = self._newton(t, y, yp, h, fresh)
+                result = self._newton(t, y, yp, h, how == "fresh")
             except ResidualDomainError:
                 result = None
             if result is not None:
@@ -173,6 +188,39 @@ class AlgebraicRefiner:
             reading = int(np.count_nonzero(np.any(m[:, cols] != 0.0, axis=1)))
         return m.shape[0] - reading == self.alg.size
 
+    def _splice(self) -> bool:
+        """The kept matrix with its algebraic columns taken from the integrator's matrix
+        when that is newer (evaluated since this matrix was): True when factorised. The
+        columns of an algebraic y are dF/dy_a in both (F reads no algebraic y', so the
+        integrator's cj does not enter them); no residual evaluation."""
+        src = None if self.source is None else self.source.matrix
+        if src is None or src is self.spliced_from or self.matrix.matrix is None:
+            return False
+        self.spliced_from = src
+        m = self.matrix.matrix
+        if self.matrix.sparse:
+            if not scipy.sparse.issparse(src) or src.data.shape != m.data.shape:
+                return False
+            if self._alg_entries is None:
+                p = self.matrix.pattern
+                cols = np.repeat(np.arange(p.shape[1]), np.diff(p.indptr))
+                self._alg_entries = self.unknown_y[cols]
+            data = np.where(self._alg_entries, src.data, m.data)
+            spliced = type(m)((data, m.indices, m.indptr), shape=m.shape)
+        else:
+            if scipy.sparse.issparse(src) or getattr(src, "shape", None) != m.shape:
+                return False
+            spliced = m.copy()
+            spliced[:, self.unknown_y] = src[:, self.unknown_y]
+        self.matrix.matrix = spliced
+        try:
+            self.matrix.factorize()
+        except SingularMatrixError:
+            self.kept = False
+            return False
+        self.stats_spliced += 1
+        return True
+
     def _weights(self, y, h):
         return 1.0 / (self.rtol * np.abs(y) + self.atol) * (self.ymask + h * self.ypmask)
 
@@ -199,6 +247,8 @@ class AlgebraicRefiner:
             except SingularMatrixError:
                 return None
             self.kept = True
+            if self.source is not None:
+                self.spliced_from = self.source.matrix  # not newer than this one
             self.block = ALGEBRAIC_TEST and self._block_triangular()
         previous = np.inf
         for k in range(MAX_ITERS):
