@@ -201,10 +201,10 @@ def _m_error(res):
 
 
 def test_the_cheaper_refinement_keeps_the_closed_form_accuracy(monkeypatch):
-    """The convergence test on the algebraic unknowns alone and the warm start
-    (``refine.ALGEBRAIC_TEST``, ``refine.WARM_START``) against the refinement as first
-    committed (both off): the same steps, fewer residual evaluations, and m as close
-    to its closed form m(x) at every output point."""
+    """The convergence test on the algebraic unknowns alone, the warm start and the
+    integrator's columns (``refine.ALGEBRAIC_TEST``, ``WARM_START``, ``SPLICE``) against
+    the refinement as first committed (all off): the same steps, fewer residual
+    evaluations, and m as close to its closed form m(x) at every output point."""
     blocks = []
     found = refine.AlgebraicRefiner._block_triangular
 
@@ -217,6 +217,7 @@ def test_the_cheaper_refinement_keeps_the_closed_form_accuracy(monkeypatch):
     with monkeypatch.context() as m:
         m.setattr(refine, "ALGEBRAIC_TEST", False)
         m.setattr(refine, "WARM_START", False)
+        m.setattr(refine, "SPLICE", False)
         first = _closed_form_run(refine=True)
     # x' = -x reads x', m's row does not: block triangular
     assert blocks and all(blocks)
