@@ -109,7 +109,8 @@ class AlgebraicRefiner:
     warm start). Raises DAEError when even the globalised Newton fails.
 
     ``matrix``: an ``IterationMatrix`` of its own (its colouring; the integrator's
-    matrix and LU are never touched, so the steps do not depend on the output)."""
+    matrix and LU are never touched, so the steps do not depend on the output);
+    ``source``: the integrator's ``IterationMatrix``, only read (``_splice``)."""
 
     def __init__(
         self, F, algebraic, rtol, atol, matrix: IterationMatrix, names, eq_names, stats, source=None
@@ -130,7 +131,7 @@ class AlgebraicRefiner:
         self.block = False  # the kept matrix is block triangular (``_block_triangular``)
         self.warm = WARM_START
         # the integrator's IterationMatrix (its algebraic columns are dF/dy_a, whatever
-        # its cj: ``_spliced``), and the matrix of it last spliced in
+        # its cj: ``_splice``), and the matrix of it last spliced in
         self.source = source if SPLICE and source is not None and source.jac is None else None
         self.spliced_from = None
         self._alg_entries = None  # the pattern's entries in algebraic columns
