@@ -53,6 +53,10 @@ from dnasim.solver.result import DAEResult
 from dnasim.solver.stops import Stops
 
 MAX_RESTARTS_AT_ONE_TIME = 50
+#: ``Driver.refine`` keeps the interpolated point when no algebraic variable was corrected
+#: by more than this many tolerance units in the step (benchmarks/refine_cost.py sets it
+#: to -inf for its reference)
+REFINE_SKIP_BELOW = 1.0
 
 
 class Driver:
@@ -150,10 +154,11 @@ class Driver:
         them to the tolerance. When the solve fails the interpolated point is kept
         (``stats["output_solve_failures"]``). ``refine.AlgebraicRefiner`` with an
         iteration matrix of its own: the integrator's is left as it is, so the steps
-        do not depend on the output.
+        do not depend on the output. The points of one step (named by the count of
+        accepted steps) share the refiner's warm start (``refine.WARM_START``).
         """
         solver = self.solver
-        if solver.algebraic_correction <= 1.0:
+        if solver.algebraic_correction <= REFINE_SKIP_BELOW:
             return y, yp
         if self._refiner is None:
             m = self.matrix
@@ -176,9 +181,10 @@ class Driver:
                 self.problem.names,
                 self.problem.equation_names,
                 self.stats,
+                source=m,
             )
         try:
-            y_new, yp_new = self._refiner(t, y, yp, solver.h_used)
+            y_new, yp_new = self._refiner(t, y, yp, solver.h_used, step=self.stats.steps)
         except DAEError:
             self.stats.output_solve_failures += 1
             return y, yp
