@@ -152,7 +152,7 @@ def simulate(
     shown in a terminal only). throw: raise ``DAEError`` (with ``err.result``)
     instead of returning Results with success False.
     """
-    from dnasim.start.initial import initial_values, reinitialise
+    from dnasim.start.initial import reinitialise
 
     if solver is None:
         solver = NordsieckBDF(**solver_options)
@@ -172,10 +172,7 @@ def simulate(
     if t_eval is not None:
         t_eval = _checked_t_eval(t_eval, t0, t_end)
     t_start = time.perf_counter()
-    if initial is None:
-        y0, yp0 = initial_values(system, t0, start)
-    else:
-        y0, yp0 = (np.array(v, dtype=float) for v in initial)
+    y0, yp0 = consistent_start(system, t0, start, initial)
     t_init = time.perf_counter() - t_start
 
     sinks = list(sinks)
@@ -276,6 +273,24 @@ def _checked_t_eval(t_eval, t0: float, t_end: float) -> np.ndarray:
     if problem:
         raise PlantError(f"simulate(): t_eval: {problem}")
     return times
+
+
+def consistent_start(system, t0: float, start: str = "steady", initial=None, notes=None):
+    """(y0, y'0) of ``system`` at t0 [s]: ``initial`` when given (already consistent),
+    else the steady or given start (``dnasim.start.initial.initial_values``); with a
+    ``notes`` list the steady start's notes (a controller holding a limit at rest, a
+    choked valve) are appended to it. The one start of ``simulate`` and ``dnasim run``."""
+    if initial is not None:
+        return tuple(np.array(v, dtype=float) for v in initial)
+    if start == "steady" and notes is not None:
+        from dnasim.start.steady_state import find_steady_state
+
+        rest = find_steady_state(system, t0)
+        notes.extend(rest.notes)
+        return rest.y, rest.yp
+    from dnasim.start.initial import initial_values
+
+    return initial_values(system, t0, start)
 
 
 def problem_for(system, t0, t_end, y0, yp0, atol_scaled, **options) -> Problem:
