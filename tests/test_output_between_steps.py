@@ -109,6 +109,7 @@ medium = "Water"
 t_end = "20 s"
 output_interval = "0.04 s"        # ClaRa's reference grid; no max_step
 start = "steady"
+refine_output = true              # the flow inside the ramp's step solved, not interpolated
 
 [components.source]               # BoundaryVLE_phxi(p_const = 3e5, h_const = 150e3)
 type = "PressureBoundary"

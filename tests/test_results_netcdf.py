@@ -233,7 +233,9 @@ def test_interrupted_run_keeps_whole_rows_in_a_closed_file(tmp_path, sig):
 def test_killed_run_keeps_whole_rows_readable(tmp_path):
     # SIGKILL: no handler, no close; the file must still open and hold whole rows
     out = tmp_path / "out"
-    proc = _start(out)
+    # 120000 rows of 0.01 s: seconds of writing after the first rows, so that the run
+    # outlasts the wait below also on an idle machine (at 1e-10 alone it finished first)
+    proc = _start(out, "--output-interval", "0.01 s")
     _wait_for_rows(proc, out / "results.csv", rows=40)
     time.sleep(1.5)  # past results.nc's flush_seconds (1 s): it has flushed blocks too
     proc.kill()

@@ -93,6 +93,8 @@ SIMULATION_KEYS = {
     "start": '"steady" (steady state at t_start) or "given" (initial states from parameters)',
     "max_step": "largest step size [s] (default: unlimited)",
     "max_steps": "most accepted steps before the run stops (default 500000)",
+    "refine_output": "true: at output points between steps, solve the algebraic variables "
+    "from the interpolated states instead of interpolating them (default false)",
 }
 
 _TOP_LEVEL = ("plant", "simulation", "components", "nodes")
@@ -203,7 +205,7 @@ def _simulation(data, errors: Problems) -> SimulationSettings:
                     errors.add(table, k, problem)
                 else:
                     setattr(s, k, x)
-    for k in ("max_steps", "max_order", "start"):
+    for k in ("max_steps", "max_order", "start", "refine_output"):
         if k in sim:
             problem = setting_problem(k, sim[k])
             if problem:

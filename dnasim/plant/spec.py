@@ -55,6 +55,8 @@ def setting_problem(name: str, x) -> str | None:
         if x > LIMITS["max_steps"]:
             return limit_message("max_steps", x, LIMITS["max_steps"])
         return None
+    if name == "refine_output":
+        return None if isinstance(x, bool) else f"expected true or false, got {x!r}"
     if name == "start":
         if not isinstance(x, str) or x.lower() not in ("steady", "given"):
             return f'expected "steady" or "given", got {x!r}'
@@ -86,6 +88,8 @@ class SimulationSettings:
     start: str = "steady"
     max_step: float | None = None
     max_steps: int | None = None
+    #: solve the algebraic variables at output points between steps (docs/plant_files.md)
+    refine_output: bool = False
 
     def output_points(self) -> float | None:
         """How many rows ``t_eval`` or ``output_interval`` asks for (None: every
