@@ -260,13 +260,13 @@ def test_full_load_steady_state_against_the_hand_heat_balance(run):
 def test_full_load_steady_state_near_the_design_heat_balance(run):
     # The design heat balance's round numbers (the plant file's header). The steady
     # state differs where the components, not the design's round numbers, decide: the
-    # deaerator settles at 5.8 bar (design 5.5), the HP heater's counter-flow shell
+    # HP heater's counter-flow shell
     # desuperheats the extraction over the feed-water outlet (251 degC against the
     # design's 238), both shells sub-cool their drains (design: saturated), the
     # spray settles at 1.3 kg/s (design 3); and the plant file's heat inputs came
     # from a first balance that counted the spray's heat twice (284.0 MW against
-    # this balance's 279.3 MW). Measured: heat input +1.7 %, steam flow +5.4 %, net
-    # power +3.8 %, efficiency +0.9 points. Tolerances: 2.5 % on the heat, 8 % on
+    # this balance's 279.3 MW). Measured: heat input +1.7 %, steam flow +5.3 %, net
+    # power +3.7 %, efficiency +0.85 points. Tolerances: 2.5 % on the heat, 8 % on
     # the steam flow and the power, 1.5 points on the efficiency.
     _, res, _ = run
     design = design_balance()
@@ -319,7 +319,7 @@ def test_load_change_is_followed_and_the_controls_hold(run):
     assert np.max(np.abs(res["drum.p"] - 140e5)) < 2e5
     # drum level within +-0.1 m of its 2.5 m set point (three-element; measured 0.04)
     assert np.max(np.abs(res["drum.level"] - 2.5)) < 0.1
-    # live steam within +-10 K of 540 degC (measured 3.8 K), +-3 K in the last 300 s
+    # live steam within +-10 K of 540 degC (measured 4.0 K), +-3 K in the last 300 s
     T = res["n_ms.T"] - 813.15
     assert np.max(np.abs(T)) < 10.0 and np.max(np.abs(T[t > 3000])) < 3.0
     # deaerator and hotwell levels stay in their vessels' working ranges
@@ -336,6 +336,41 @@ def test_load_change_is_followed_and_the_controls_hold(run):
     assert np.min(h_l - res["n_eco.h"]) > 50e3
     # and at the end the unit is back near full load
     assert m[-1] == pytest.approx(m0, rel=0.03)
+
+
+# Deaerator pressure bands [Pa]. Measured (benchmarks/drum_unit.py): 5.22-5.63 bar
+# over the whole run (0.08 bar below the pegging set point while the ramp down
+# outruns the pegging PI, 0.13 bar above 5.5 bar on the ramp up); at 50 %, 1400-1800
+# s, within 0.037 bar of 5.3 bar; after 3100 s within 0.03 bar of 5.5 bar. The
+# bands are these with a margin of about 1.5 to 3 times.
+BAND_DA = 0.2e5
+BAND_DA_HALF = 0.1e5
+BAND_DA_END = 0.1e5
+
+
+def test_deaerator_pressure_is_held_by_extraction_and_pegging_steam(run):
+    _, res, _ = run
+    t = res.t
+    p_da = res["deaerator.p"]
+    half = (t > 1400) & (t < 1800)  # 50 % firing, settled
+    # full load: the extraction's control valve holds the set point 5.5 bar (the
+    # steady start: to the solver's tolerance), the pegging valve shut (its leakage)
+    assert p_da[0] == pytest.approx(5.5e5, rel=1e-6)
+    assert res["pegging_valve.m"][0] < 1e-3
+    # half load: the crossover lies below the deaerator, the non-return valve is
+    # shut (at most its leakage, backwards) and the pegging steam holds 5.3 bar
+    assert np.all(res["n_xo.p"][half] < p_da[half])
+    assert np.all(np.abs(res["da_nrv.m"][half]) < 1e-3)
+    assert np.all(res["pegging_valve.m"][half] > 0.2)  # measured >= 0.36 kg/s
+    assert np.all(np.abs(p_da[half] - 5.3e5) < BAND_DA_HALF)
+    # through the whole load change the pressure stays within a band around the
+    # two set points (5.3-5.5 bar): the ramp at 5 %/min outruns the PIs for a while
+    # when the extraction runs out and when it takes over again
+    assert 5.3e5 - BAND_DA < np.min(p_da) and np.max(p_da) < 5.5e5 + BAND_DA
+    # and at the end the extraction holds 5.5 bar again, the pegging valve shut
+    end = t > 3100
+    assert np.all(np.abs(p_da[end] - 5.5e5) < BAND_DA_END)
+    assert np.all(res["pegging_valve.m"][end] < 1e-3)
 
 
 def test_drum_unit_runs_through_the_cli(tmp_path):
