@@ -32,6 +32,9 @@ CONTROLLED = [
     ("drum pressure", "drum.p", 1e-5, "bar", 140.0),
     ("drum level", "drum.level", 1.0, "m", 2.5),
     ("live steam T (n_ms)", "n_ms.T", 1.0, "K", 813.15),
+    ("hot reheat T (n_hrh)", "n_hrh.T", 1.0, "K", 795.15),
+    ("  reheater outlet (n_rho, free)", "n_rho.T", 1.0, "K", float("nan")),
+    ("  reheat spray flow", "rh_spray_valve.m", 1.0, "kg/s", float("nan")),
     ("deaerator pressure (5.5 / 5.3)", "deaerator.p", 1e-5, "bar", 5.5),
     ("deaerator level", "deaerator.level", 1.0, "m", 2.5),
     ("hotwell level", "condenser.level", 1.0, "m", 1.0),
@@ -58,8 +61,8 @@ def main():
     print("full load, steady start: simulation against the hand heat balance (IF97)")
     print(f"{'quantity':<10} {'unit':>5} {'simulated':>12} {'hand':>12} {'rel. diff':>10} "
           f"{'design':>10}")  # fmt: skip
-    for key in ("m_steam", "m_feed", "m_spray", "m_hph", "m_da", "m_cond", "m_lph",
-                "P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta", "T_hrh"):  # fmt: skip
+    for key in ("m_steam", "m_feed", "m_spray", "m_rh_spray", "m_hph", "m_da", "m_cond",
+                "m_lph", "P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta", "T_rho"):  # fmt: skip
         unit, f = units[key[0]]
         s, h = sim[key], hand[key]
         d = design.get(key)
