@@ -27,6 +27,19 @@ from test_drum_unit import (  # noqa: E402
 
 from dnasim.plant.plantfile import load, simulate_plant  # noqa: E402
 
+#: (label, result, factor, unit, set point): the controlled quantities
+CONTROLLED = [
+    ("drum pressure", "drum.p", 1e-5, "bar", 140.0),
+    ("drum level", "drum.level", 1.0, "m", 2.5),
+    ("live steam T (n_ms)", "n_ms.T", 1.0, "K", 813.15),
+    ("hot reheat T (n_hrh)", "n_hrh.T", 1.0, "K", 795.15),
+    ("  reheater outlet (n_rho, free)", "n_rho.T", 1.0, "K", float("nan")),
+    ("  reheat spray flow", "rh_spray_valve.m", 1.0, "kg/s", float("nan")),
+    ("deaerator pressure (5.5 / 5.3)", "deaerator.p", 1e-5, "bar", 5.5),
+    ("deaerator level", "deaerator.level", 1.0, "m", 2.5),
+    ("hotwell level", "condenser.level", 1.0, "m", 1.0),
+]
+
 
 def main():
     ap = argparse.ArgumentParser()
@@ -48,8 +61,8 @@ def main():
     print("full load, steady start: simulation against the hand heat balance (IF97)")
     print(f"{'quantity':<10} {'unit':>5} {'simulated':>12} {'hand':>12} {'rel. diff':>10} "
           f"{'design':>10}")  # fmt: skip
-    for key in ("m_steam", "m_feed", "m_spray", "m_hph", "m_da", "m_cond", "m_lph",
-                "P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta", "T_hrh"):  # fmt: skip
+    for key in ("m_steam", "m_feed", "m_spray", "m_rh_spray", "m_hph", "m_da", "m_cond",
+                "m_lph", "P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta", "T_rho"):  # fmt: skip
         unit, f = units[key[0]]
         s, h = sim[key], hand[key]
         d = design.get(key)
@@ -57,6 +70,17 @@ def main():
         print(f"{key:<10} {unit:>5} {s * f:12.5f} {h * f:12.5f} {s / h - 1:10.2e} {dtxt}")
     print(f"{'Q_in':<10} {'MW':>5} {hand['Q_in'] * 1e-6:12.5f} {'(given)':>12} {'':>10} "
           f"{design['Q_in'] * 1e-6:10.4f}")  # fmt: skip
+    print()
+    print("controls through the load change (min and max over the whole 3300 s)")
+    print(f"{'quantity':<34} {'unit':>5} {'set point':>10} {'min':>10} {'max':>10}")
+    t = res.t
+    half = (t > 1400) & (t < 1800)
+    for label, x, f, unit, w in CONTROLLED:
+        y = res[x] * f
+        print(f"{label:<34} {unit:>5} {w:10.3f} {y.min():10.3f} {y.max():10.3f}")
+        if x == "deaerator.p":
+            print(f"{'  at 50 %, 1400-1800 s':<34} {unit:>5} {5.3:10.3f} {y[half].min():10.3f} "
+                  f"{y[half].max():10.3f}")  # fmt: skip
     st = res.stats
     t_end = float(res.t[-1])
     print()

@@ -84,19 +84,23 @@ def hand_balance(v):
     # HP heater: m_feed (h_fw - h_fp) = m_hph (h_crh - h_drain)
     h_hd = h_pT(v["p_hph_drain"], v["T_hph_drain"])
     m_hph = m_feed * (h_fw - h_fp) / (h["crh"] - h_hd)
-    # reheater, IP turbine
+    # reheater (the pegging valve is shut at full load: its leakage, ~3e-5 kg/s, is
+    # left out), reheat spray after it: m_rh h_rho + m_rsp h_fp = (m_rh + m_rsp) h_hrh
     m_rh = m_ms - m_hph
-    h["hrh"] = h["crh"] + Q["reheater"] / m_rh
-    out["T_hrh"] = PropsSI("T", "P", v["p_hrh"], "H", h["hrh"], IF97)
+    h["rho"] = h["crh"] + Q["reheater"] / m_rh
+    out["T_rho"] = PropsSI("T", "P", v["p_rho"], "H", h["rho"], IF97)
+    h["hrh"] = h_pT(v["p_hrh"], v["T_hrh"])  # after the reheat spray (controlled)
+    m_rsp = m_rh * (h["rho"] - h["hrh"]) / (h["hrh"] - h_fp)
+    m_ip = m_rh + m_rsp
     h["xo"] = expand(v["p_hrh"], h["hrh"], v["p_xo"], ETA["ip"])
     # deaerator: m_c h_c + m_hph h_hd + m_da h_xo = m_fp h'(p_da), m_c + m_hph + m_da = m_fp
-    m_fp = m_feed + m_sp
+    m_fp = m_feed + m_sp + m_rsp
     h_c = h_pT(v["p_lph"], v["T_lph"])  # condensate after the LP heater (isenthalpic valve)
     h_da = h_sat(v["p_da"], 0)
     m_da = (m_fp * h_da - m_hph * h_hd - (m_fp - m_hph) * h_c) / (h["xo"] - h_c)
     m_cond = m_fp - m_hph - m_da
     # LP turbine groups, LP heater: m_cond (h_c - h_cp) = m_lph (h_lp - h_lph_drain)
-    m_lp1 = m_rh - m_da
+    m_lp1 = m_ip - m_da
     h["lp"] = expand(v["p_xo"], h["xo"], v["p_lp"], ETA["lp1"])
     h_cp = h_pT(v["p_cp"], v["T_cp"])
     h_ld = h_pT(v["p_lph_drain"], v["T_lph_drain"])
@@ -105,7 +109,7 @@ def hand_balance(v):
     h["exh"] = expand(v["p_lp"], h["lp"], v["p_exh"], ETA["lp2"])
     P_t = {
         "hp": m_ms * (h_ms - h["crh"]),
-        "ip": m_rh * (h["hrh"] - h["xo"]),
+        "ip": m_ip * (h["hrh"] - h["xo"]),
         "lp1": m_lp1 * (h["xo"] - h["lp"]),
         "lp2": m_lp2 * (h["lp"] - h["exh"]),
     }
@@ -120,6 +124,7 @@ def hand_balance(v):
         m_steam=m_ms,
         m_feed=m_feed,
         m_spray=m_sp,
+        m_rh_spray=m_rsp,
         m_hph=m_hph,
         m_da=m_da,
         m_cond=m_cond,
@@ -206,9 +211,9 @@ def operating_points(res, k=0):
     v = {}
     for key, node in [
         ("hph", "n_hph"), ("fp", "n_fp"), ("ms", "n_ms"), ("hp", "n_hp"), ("crh", "n_crh"),
-        ("hrh", "n_hrh"), ("xo", "n_xo"), ("lp", "n_lp"), ("exh", "n_exh"), ("lph", "n_lph"),
-        ("cp", "n_cp"), ("hw", "n_hw"), ("fps", "n_fps"), ("hph_drain", "n_hph_drain"),
-        ("lph_drain", "n_lph_drain"),
+        ("rho", "n_rho"), ("hrh", "n_hrh"), ("xo", "n_xo"), ("lp", "n_lp"), ("exh", "n_exh"),
+        ("lph", "n_lph"), ("cp", "n_cp"), ("hw", "n_hw"), ("fps", "n_fps"),
+        ("hph_drain", "n_hph_drain"), ("lph_drain", "n_lph_drain"),
     ]:  # fmt: skip
         v[f"p_{key}"] = res[f"{node}.p"][k]
         v[f"T_{key}"] = res[f"{node}.T"][k]
@@ -227,6 +232,7 @@ def simulated(res, k=0):
         "m_steam": res["turbine_valve.m"][k],
         "m_feed": res["feed_valve.m"][k],
         "m_spray": res["spray_valve.m"][k],
+        "m_rh_spray": res["rh_spray_valve.m"][k],
         "m_hph": res["hph_drain.m"][k],
         "m_da": res["da_steam_valve.m"][k],
         "m_cond": res["condensate_valve.m"][k],
@@ -237,7 +243,7 @@ def simulated(res, k=0):
         "P_pumps": pumps,
         "net": turbines - pumps,
         "eta": (turbines - pumps) / Q_in,
-        "T_hrh": res["n_hrh.T"][k],
+        "T_rho": res["n_rho.T"][k],
     }
 
 
@@ -249,24 +255,29 @@ def test_full_load_steady_state_against_the_hand_heat_balance(run):
     # s(p, h), h(p, s)); the extraction flows divide by enthalpy differences of
     # 240-2800 kJ/kg. Measured (benchmarks/drum_unit.py): flows <= 4e-6, turbine
     # powers <= 4.5e-5 (h(p, s) of the wet LP exhaust), net power and efficiency
-    # 1.1e-5, hot reheat 7 mK. Tolerances 3e-4: a few times the largest of these.
+    # 1.1e-5, reheater outlet 7 mK. Tolerances 3e-4: a few times the largest of these.
     for key in ("m_steam", "m_feed", "m_spray", "m_cond", "m_hph", "m_da", "m_lph"):
         assert sim[key] == pytest.approx(hand[key], rel=3e-4), key
+    # The reheat spray is a small difference: m_rh (h_rho - h_hrh)/(h_hrh - h_fp) with
+    # h_rho - h_hrh ~ 15 kJ/kg, so the reheater outlet's 7 mK (~17 J/kg) become
+    # ~5e-4 kg/s of its 0.45 kg/s; measured -4.0e-4 relative. Tolerance 2e-3.
+    assert sim["m_rh_spray"] == pytest.approx(hand["m_rh_spray"], rel=2e-3)
     for key in ("P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta"):
         assert sim[key] == pytest.approx(hand[key], rel=3e-4), key
-    assert sim["T_hrh"] == pytest.approx(hand["T_hrh"], abs=0.05)  # [K]
+    assert sim["T_rho"] == pytest.approx(hand["T_rho"], abs=0.05)  # [K], reheater outlet
 
 
 def test_full_load_steady_state_near_the_design_heat_balance(run):
     # The design heat balance's round numbers (the plant file's header). The steady
     # state differs where the components, not the design's round numbers, decide: the
-    # deaerator settles at 5.8 bar (design 5.5), the HP heater's counter-flow shell
-    # desuperheats the extraction over the feed-water outlet (251 degC against the
-    # design's 238), both shells sub-cool their drains (design: saturated), the
-    # spray settles at 1.3 kg/s (design 3); and the plant file's heat inputs came
-    # from a first balance that counted the spray's heat twice (284.0 MW against
-    # this balance's 279.3 MW). Measured: heat input +1.7 %, steam flow +5.4 %, net
-    # power +3.8 %, efficiency +0.9 points. Tolerances: 2.5 % on the heat, 8 % on
+    # HP heater's counter-flow shell desuperheats the extraction over the feed-water
+    # outlet (251 degC against the design's 238), both shells sub-cool their drains
+    # (design: saturated), the spray settles at 1.3 kg/s (design 3), the hot reheat
+    # is held at 522 degC by a reheat spray of 0.45 kg/s (design: 540 degC, no
+    # spray); and the plant file's heat inputs came from a first balance that counted
+    # the spray's heat twice (284.0 MW against this balance's 279.3 MW). Measured:
+    # heat input +1.7 %, steam flow +5.4 %, net power +3.4 %, efficiency +0.74
+    # points. Tolerances: 2.5 % on the heat, 8 % on
     # the steam flow and the power, 1.5 points on the efficiency.
     _, res, _ = run
     design = design_balance()
@@ -319,7 +330,7 @@ def test_load_change_is_followed_and_the_controls_hold(run):
     assert np.max(np.abs(res["drum.p"] - 140e5)) < 2e5
     # drum level within +-0.1 m of its 2.5 m set point (three-element; measured 0.04)
     assert np.max(np.abs(res["drum.level"] - 2.5)) < 0.1
-    # live steam within +-10 K of 540 degC (measured 3.8 K), +-3 K in the last 300 s
+    # live steam within +-10 K of 540 degC (measured 4.0 K), +-3 K in the last 300 s
     T = res["n_ms.T"] - 813.15
     assert np.max(np.abs(T)) < 10.0 and np.max(np.abs(T[t > 3000])) < 3.0
     # deaerator and hotwell levels stay in their vessels' working ranges
@@ -336,6 +347,60 @@ def test_load_change_is_followed_and_the_controls_hold(run):
     assert np.min(h_l - res["n_eco.h"]) > 50e3
     # and at the end the unit is back near full load
     assert m[-1] == pytest.approx(m0, rel=0.03)
+
+
+# Deaerator pressure bands [Pa]. Measured (benchmarks/drum_unit.py): 5.22-5.63 bar
+# over the whole run (0.08 bar below the pegging set point while the ramp down
+# outruns the pegging PI, 0.13 bar above 5.5 bar on the ramp up); at 50 %, 1400-1800
+# s, within 0.037 bar of 5.3 bar; after 3100 s within 0.03 bar of 5.5 bar. The
+# bands are these with a margin of about 1.5 to 3 times.
+BAND_DA = 0.2e5
+BAND_DA_HALF = 0.1e5
+BAND_DA_END = 0.1e5
+
+
+def test_deaerator_pressure_is_held_by_extraction_and_pegging_steam(run):
+    _, res, _ = run
+    t = res.t
+    p_da = res["deaerator.p"]
+    half = (t > 1400) & (t < 1800)  # 50 % firing, settled
+    # full load: the extraction's control valve holds the set point 5.5 bar (the
+    # steady start: to the solver's tolerance), the pegging valve shut (its leakage)
+    assert p_da[0] == pytest.approx(5.5e5, rel=1e-6)
+    assert res["pegging_valve.m"][0] < 1e-3
+    # half load: the crossover lies below the deaerator, the non-return valve is
+    # shut (at most its leakage, backwards) and the pegging steam holds 5.3 bar
+    assert np.all(res["n_xo.p"][half] < p_da[half])
+    assert np.all(np.abs(res["da_nrv.m"][half]) < 1e-3)
+    assert np.all(res["pegging_valve.m"][half] > 0.2)  # measured >= 0.36 kg/s
+    assert np.all(np.abs(p_da[half] - 5.3e5) < BAND_DA_HALF)
+    # through the whole load change the pressure stays within a band around the
+    # two set points (5.3-5.5 bar): the ramp at 5 %/min outruns the PIs for a while
+    # when the extraction runs out and when it takes over again
+    assert 5.3e5 - BAND_DA < np.min(p_da) and np.max(p_da) < 5.5e5 + BAND_DA
+    # and at the end the extraction holds 5.5 bar again, the pegging valve shut
+    end = t > 3100
+    assert np.all(np.abs(p_da[end] - 5.5e5) < BAND_DA_END)
+    assert np.all(res["pegging_valve.m"][end] < 1e-3)
+
+
+# Hot reheat band [K] around its 522 degC set point. Measured (benchmarks/drum_unit.py):
+# 0.57 K over the whole run, 0.14 K after 3000 s; the bands are about 3 times these.
+BAND_RH = 1.5
+BAND_RH_END = 0.5
+
+
+def test_hot_reheat_temperature_is_held_by_the_reheat_spray(run):
+    _, res, _ = run
+    t = res.t
+    T = res["n_hrh.T"] - 795.15  # set point 522 degC
+    # the reheater's outlet floats by ~10 K with the load (measured 800.3-809.9 K:
+    # hotter at part load); the spray after it holds the hot reheat
+    T_rho = res["n_rho.T"]
+    assert np.max(T_rho) - np.min(T_rho) > 5.0
+    assert np.all(res["rh_spray_valve.m"] > 0.05)  # spraying throughout, not saturated
+    assert np.max(np.abs(T)) < BAND_RH
+    assert np.max(np.abs(T[t > 3000])) < BAND_RH_END
 
 
 def test_drum_unit_runs_through_the_cli(tmp_path):
