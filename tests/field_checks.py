@@ -2,7 +2,7 @@
 
 Used by ``tests/test_field.py`` (pytest) and ``benchmarks/field_tests.py`` (the table).
 Each plant in ``tests/field/*.toml`` is run as a user runs it, through the CLI in a
-fresh process (``python -m dnasim.cli.commands run PLANT -o DIR -q``), and judged from
+fresh process (``python -m dnasim run PLANT -o DIR -q``), and judged from
 ``DIR/results.csv`` alone, against things nobody here wrote:
 
 - conservation over the whole run, from the running integrals in results.csv:
@@ -90,7 +90,7 @@ def run_plant(name: str, outdir: Path) -> Run:
     outdir = Path(outdir)
     t0 = time.perf_counter()
     proc = subprocess.run(
-        [sys.executable, "-m", "dnasim.cli.commands", "run", str(path), "-o", str(outdir), "-q"],
+        [sys.executable, "-m", "dnasim", "run", str(path), "-o", str(outdir), "-q"],
         capture_output=True,
         text=True,
     )

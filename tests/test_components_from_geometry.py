@@ -39,13 +39,13 @@ ROOT_PLANTS = Path(__file__).resolve().parents[1] / "plants"
 
 
 def run_cli(tmp_path, name, text):
-    """Write the plant file, run it as a user does (``python -m dnasim.cli.commands run``), and
+    """Write the plant file, run it as a user does (``python -m dnasim run``), and
     return the ``field_checks.Run`` (results.csv without units, the loaded plant)."""
     path = tmp_path / f"{name}.toml"
     path.write_text(textwrap.dedent(text))
     out = tmp_path / f"{name}_out"
     proc = subprocess.run(
-        [sys.executable, "-m", "dnasim.cli.commands", "run", str(path), "-o", str(out), "-q"],
+        [sys.executable, "-m", "dnasim", "run", str(path), "-o", str(out), "-q"],
         capture_output=True,
         text=True,
     )

@@ -26,7 +26,7 @@ def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("evaporator")
     t0 = time.perf_counter()
     proc = subprocess.run(
-        [sys.executable, "-m", "dnasim.cli.commands", "run", str(PLANT), "-o", str(out), "-q"],
+        [sys.executable, "-m", "dnasim", "run", str(PLANT), "-o", str(out), "-q"],
         capture_output=True,
         text=True,
     )

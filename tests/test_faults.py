@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PLANTS = ROOT / "plants"
 AIR = (PLANTS / "air_pipe.toml").read_text()
 ATT = (PLANTS / "attemperator.toml").read_text()
-DNASIM = [sys.executable, "-m", "dnasim.cli.commands"]
+DNASIM = [sys.executable, "-m", "dnasim"]
 
 
 def invoke(*args):

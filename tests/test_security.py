@@ -35,7 +35,7 @@ LAG = (
     .read_text()
     .replace('t_end = "60 s"', 't_end = "20 s"')
 )
-DNASIM = [sys.executable, "-m", "dnasim.cli.commands"]
+DNASIM = [sys.executable, "-m", "dnasim"]
 
 
 def invoke(*args):

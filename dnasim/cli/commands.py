@@ -9,17 +9,8 @@ commands, so ``dnasim --help`` starts fast.
 
 from __future__ import annotations
 
-import signal
-import sys
-
-if (
-    __name__ == "__main__"
-):  # python -m dnasim.cli.commands: the signal handlers before anything else
-    from dnasim.core.interrupts import install
-
-    install()
-
 import os
+import signal
 from pathlib import Path
 
 import click
@@ -438,9 +429,3 @@ def upgrade(plant_file, out_file, in_place):
     except OSError as exc:
         raise InputError(f"cannot write {target}: {exc.strerror or exc}") from None
     click.echo(f"dnasim: upgrade: wrote {target}", err=True)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    from dnasim.cli.entry import main as _main
-
-    sys.exit(_main())

@@ -49,7 +49,7 @@ def _raise(signum):
 
 def install() -> None:
     """Catch SIGTERM and SIGINT from now on and hold them until :func:`release`
-    (a second call, from ``python -m dnasim.cli.commands``, keeps a signal already held)."""
+    (a second call keeps a signal already held)."""
     if _state["installed"]:
         return
     _state.update(holding=True, pending=None, installed=True)
