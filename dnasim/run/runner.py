@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from dnasim.core.interrupts import held
 from dnasim.plant.plantinfo import describe_loaded, write_plant_json
 from dnasim.run.output import clear_results, write_events_csv, write_steps_csv
 from dnasim.run.progress import Progress as _Progress
@@ -284,8 +285,11 @@ def run_plant(
     at_times = None if t_eval is None else AtTimes(t_eval, lambda t, _, row: put(t, row))
 
     def put(t, row):
-        for sink in state["sinks"]:
-            sink.write(t, row)
+        # every file gets the row or none does: a signal between two sinks' writes
+        # would leave results.csv one row ahead of results.nc (and of the message)
+        with held():
+            for sink in state["sinks"]:
+                sink.write(t, row)
 
     def write(t, y, yp):
         try:
