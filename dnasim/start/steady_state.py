@@ -49,7 +49,11 @@ How it is found (each stage only when the one before failed):
 
 A start that fails raises ``SteadyStateError`` (a ``PlantError``): one paragraph
 naming the components, variables and the likely physical cause, and what to try
-(``steady_message``).
+(``steady_message``). A failed continuation is examined for a balance that closes for
+no value of its own state (``unclosed_balances``: a drum without level control, whose
+pressure the mass balance alone sets, and whose energy balance then misses by a fixed
+power whatever its level): such a plant has no state at rest, and the message names
+the balance and its miss at rest.
 """
 
 from __future__ import annotations
