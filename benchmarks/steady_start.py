@@ -88,7 +88,7 @@ def one(path: Path, settle: float | None) -> tuple:
     except Exception as err:  # noqa: BLE001 - reported in the table
         text = str(err)
         if "cannot close at rest" in text:  # a balance that closes for no value of its state
-            where = text[text.find("Where the search stopped: ") + 26 :]
+            where = text[text.find("no state at rest: ") + 18 :]
             return ("no*", "balance", "-", "-", "-", "-", where[:600])
         stage = "pseudo" if "continuation" in text else "ranges" if "ranges" in text else "newton"
         return ("no", stage, "-", "-", "-", "-", text[:160])

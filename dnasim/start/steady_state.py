@@ -771,29 +771,31 @@ def steady_message(system, t0, err, first=None, stats=None, guess=None) -> str:
     node states outside the fluid's range, flows far above their nominal values, a
     choked valve, the balances that do not close) and what to try."""
     state = getattr(err, "state", None) or getattr(first, "state", None)
-    causes = []
+    causes, unclosed = [], []
     if state is not None:
         y, yp = state
         starts = [y] if guess is None else [np.asarray(guess, dtype=float), y]
-        causes += unclosed_balances(system, t0, y, stats or SteadyStats(), starts=starts)
+        unclosed = unclosed_balances(system, t0, y, stats or SteadyStats(), starts=starts)
         causes += limit_problems(system, t0, y, yp)
         causes += node_problems(system, y)
         causes += flow_problems(system, y)
         causes += no_flow_problems(system, y)
         causes += open_balances(system, t0, y)
-    text = (
-        f"At t = {t0:.10g}, steady start of plant '{system.name}': no state at rest found "
-        f"({_reason(err)})."
-    )
+    head = f"At t = {t0:.10g}, steady start of plant '{system.name}': "
+    if unclosed:
+        text = (
+            head + "the plant has no state at rest: " + "; ".join(unclosed) + ". A balance "
+            "that closes for no value of its own state closes at rest only if the boundary "
+            "conditions and heat inputs match exactly: change one of them, or give that "
+            "state a control (a drum or tank without a level control keeps its level only "
+            f"by such a match). The search: {_reason(err)}."
+        )
+    else:
+        text = head + f"no state at rest found ({_reason(err)})."
     if causes:
         text += " Where the search stopped: " + "; ".join(causes) + "."
-    if any(UNCLOSED in c for c in causes):
-        text += (
-            " A balance that closes for no value of its own state closes at rest only if "
-            "the boundary conditions and heat inputs match exactly: change one of them, or "
-            "give that state a control (a drum or tank without a level control keeps its "
-            "level only by such a match)."
-        )
+    if unclosed:
+        return text + ' Or start from given initial states (start = "given")'
     return text + (
         " Check the boundary conditions (pressures, temperatures, flows) and the "
         "controllers' set points and ranges; give guesses for the nodes the search "
@@ -1003,14 +1005,14 @@ def unclosed_balances(system, t0, y, stats, count=2, starts=None) -> list[str]:
         unit = "" if unit in ("1", "-") else unit
         per = f"{unit}/s" if unit else "per s"
         text = (
-            f"{system.eq_names[i]} {UNCLOSED}: holding {system.names[j]} at any value near "
-            "there, every other balance closes"
+            f"{system.eq_names[i]} {UNCLOSED}: holding {system.names[j]} fixed, every other "
+            "balance closes"
         )
         owner = system.var_owner[j]
         k = system.index.get(f"{owner}.p")
         if k is not None and system.units.get(system.names[k]) == "Pa":
             text += f" (at {owner}.p = {y1[k] / 1e5:.6g} bar)"
-        text += f", and {system.names[j]} still changes at {r0:.6g} {per}"
+        text += f", and {system.names[j]} still changes at {r0:.6g} {per} whatever its value"
         if unit == "J":
             text += (
                 f": the energy balance is {abs(r0) / 1e3:.6g} kW "
