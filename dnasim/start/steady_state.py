@@ -49,7 +49,11 @@ How it is found (each stage only when the one before failed):
 
 A start that fails raises ``SteadyStateError`` (a ``PlantError``): one paragraph
 naming the components, variables and the likely physical cause, and what to try
-(``steady_message``).
+(``steady_message``). A failed continuation is examined for a balance that closes for
+no value of its own state (``unclosed_balances``: a drum without level control, whose
+pressure the mass balance alone sets, and whose energy balance then misses by a fixed
+power whatever its level): such a plant has no state at rest, and the message names
+the balance and its miss at rest.
 """
 
 from __future__ import annotations
@@ -235,7 +239,9 @@ def _unconstrained(system, t0, y_guess, stats) -> SteadyState:
     try:
         y2, yp2 = pseudo_transient(system, t0, last, stats)
     except SteadyStateError as err:
-        raise SteadyStateError(steady_message(system, t0, err, first)) from None
+        out = SteadyStateError(steady_message(system, t0, err, first, stats=stats, guess=last))
+        out.state = err.state
+        raise out from None
     stats.method = "pseudo-transient"
     # the controllers free of their limits from there (stage 3 needs that state)
     modes = _save_modes(system)
@@ -325,16 +331,18 @@ def fixed_mask(system, t0, y) -> np.ndarray:
     return fixed
 
 
-def rest_newton(system, t0, y, stats, *, max_iter=60):
+def rest_newton(system, t0, y, stats, *, max_iter=60, hold=()):
     """Newton on F(t0, y, 0) = 0 from y (``solve_mixed``), the state modes (phases)
     updated from the solution and solved again when they change (at most 3 times).
-    Returns (y, yp); raises PlantError."""
+    ``hold``: indices of states that keep their value too, their derivative solved
+    (``unclosed_balances``). Returns (y, yp); raises PlantError."""
     from dnasim.start.consistent import solve_mixed
 
     dae = _counted(system, stats)
     y = np.array(y, dtype=float)
     for _ in range(3):
         fixed = fixed_mask(system, t0, y)
+        fixed[list(hold)] = True
         yp = np.zeros(system.n)
         y, yp = solve_mixed(
             dae, t0, y, yp, ~fixed, max_iter=max_iter, what=_what(system), matrix=dae.matrix
@@ -754,27 +762,40 @@ def _driven_against_pressure(system, name, states) -> list[str]:
     return out
 
 
-def steady_message(system, t0, err, first=None) -> str:
-    """The failed start in plant terms: where the search stopped (the last state of the
-    continuation, else of the Newton iteration from the guess), what is wrong there
-    (controllers beyond their limits, node states outside the fluid's range, flows far
-    above their nominal values, a choked valve, the balances that do not close) and
-    what to try."""
+def steady_message(system, t0, err, first=None, stats=None, guess=None) -> str:
+    """The failed start in plant terms: a balance that cannot close at rest whatever
+    the state (``unclosed_balances``: then the plant has no state at rest, said first);
+    where the search stopped (the last state of the continuation, else of the Newton
+    iteration from the guess; ``guess``: the start of the search, where
+    ``unclosed_balances`` solves first), what is wrong there (controllers beyond their limits,
+    node states outside the fluid's range, flows far above their nominal values, a
+    choked valve, the balances that do not close) and what to try."""
     state = getattr(err, "state", None) or getattr(first, "state", None)
-    causes = []
+    causes, unclosed = [], []
     if state is not None:
         y, yp = state
+        starts = [y] if guess is None else [np.asarray(guess, dtype=float), y]
+        unclosed = unclosed_balances(system, t0, y, stats or SteadyStats(), starts=starts)
         causes += limit_problems(system, t0, y, yp)
         causes += node_problems(system, y)
         causes += flow_problems(system, y)
         causes += no_flow_problems(system, y)
         causes += open_balances(system, t0, y)
-    text = (
-        f"At t = {t0:.10g}, steady start of plant '{system.name}': no state at rest found "
-        f"({_reason(err)})."
-    )
+    head = f"At t = {t0:.10g}, steady start of plant '{system.name}': "
+    if unclosed:
+        text = (
+            head + "the plant has no state at rest: " + "; ".join(unclosed) + ". A balance "
+            "that closes for no value of its own state closes at rest only if the boundary "
+            "conditions and heat inputs match exactly: change one of them, or give that "
+            "state a control (a drum or tank without a level control keeps its level only "
+            f"by such a match). The search: {_reason(err)}."
+        )
+    else:
+        text = head + f"no state at rest found ({_reason(err)})."
     if causes:
         text += " Where the search stopped: " + "; ".join(causes) + "."
+    if unclosed:
+        return text + ' Or start from given initial states (start = "given")'
     return text + (
         " Check the boundary conditions (pressures, temperatures, flows) and the "
         "controllers' set points and ranges; give guesses for the nodes the search "
@@ -942,6 +963,109 @@ def open_balances(system, t0, y, count=3) -> list[str]:
             text += f" (its pressure {owner}.p = {y[k] / 1e5:.5g} bar)"
         out.append(text)
     return out
+
+
+#: balances ``unclosed_balances`` tries (the ones furthest from rest where the search
+#: stopped), and the relative change of the held state between its two solves [-]
+MAX_UNCLOSED = 4
+HOLD_STEP = 1e-2
+#: a held state whose balance's rate changes by less than this fraction between the
+#: two solves leaves the rate unchanged: a state free at rest [-]
+FREE_RATE = 1e-3
+#: the words of ``unclosed_balances``' sentences (``benchmarks/steady_start.py`` reads them)
+UNCLOSED = "cannot close at rest"
+
+
+def unclosed_balances(system, t0, y, stats, count=2, starts=None) -> list[str]:
+    """Balances that close at rest by coincidence only, found at the state y where the
+    search stopped: a state y_j whose value no other equation needs at rest (a drum's
+    or tank's level when no flow and no controller reads it: its pressure follows
+    from the mass balance alone, and the energy balance must close at that same
+    pressure). Each candidate (the balances of ``open_balances``, furthest from rest
+    first, ranked at y) is held at its value in the first of ``starts`` (default: y)
+    from which it solves (``rest_newton`` with ``hold``; its derivative solved), the
+    rest of the plant solved to rest, and again with y_j moved by
+    HOLD_STEP of its scale: when both solves converge and the balance's rate
+    dy_j/dt is the same in both (within FREE_RATE) and not zero, no value of y_j
+    brings that balance to rest, and the plant has no state at rest near there.
+    Returns a sentence per such balance (at most ``count``): the rate, the held
+    state's owner's pressure, and for an energy balance [J] the power it misses."""
+    rows = _balance_rows(system, t0, y)[:MAX_UNCLOSED]
+    out = []
+    for _, i, j in rows:
+        if len(out) >= count:
+            break
+        found = _held_rates(system, t0, j, [y] if starts is None else starts, stats)
+        if found is None:
+            continue
+        r0, r1, y1 = found
+        if not abs(r0) / system.nominal[j] > 1e-12 or abs(r1 - r0) > FREE_RATE * abs(r0):
+            continue
+        unit = system.units.get(system.names[j], "")
+        unit = "" if unit in ("1", "-") else unit
+        per = f"{unit}/s" if unit else "per s"
+        text = (
+            f"{system.eq_names[i]} {UNCLOSED}: holding {system.names[j]} fixed, every other "
+            "balance closes"
+        )
+        owner = system.var_owner[j]
+        k = system.index.get(f"{owner}.p")
+        if k is not None and system.units.get(system.names[k]) == "Pa":
+            text += f" (at {owner}.p = {y1[k] / 1e5:.6g} bar)"
+        text += f", and {system.names[j]} still changes at {r0:.6g} {per} whatever its value"
+        if unit == "J":
+            text += (
+                f": the energy balance is {abs(r0) / 1e3:.6g} kW "
+                f"{'short (less heat in than out)' if r0 < 0 else 'over (more heat in than out)'}"
+            )
+        elif unit == "kg":
+            text += f": the mass balance is {abs(r0):.6g} kg/s {'short' if r0 < 0 else 'over'}"
+        out.append(text)
+    return out
+
+
+def _held_rates(system, t0, j, starts, stats):
+    """(rate, rate with y_j moved by HOLD_STEP of its scale, state at rest) of state j
+    held (``unclosed_balances``), from the first of ``starts`` where both solves
+    converge and the first lies inside the components' ranges (``range_problems``);
+    None when none does. The modes are left as they were."""
+    for start in starts:
+        scale = max(float(system.nominal[j]), abs(float(start[j])))
+        rates = []
+        for shift in (0.0, HOLD_STEP):
+            y0 = np.array(start, dtype=float)
+            y0[j] += shift * scale
+            modes = _save_modes(system)
+            try:
+                y1, yp1 = rest_newton(system, t0, y0, stats, hold=(j,))
+            except (PlantError, DAEError, ResidualDomainError):
+                break
+            finally:
+                _restore_modes(system, modes)
+            if shift == 0.0 and range_problems(system, t0, y1):
+                break  # a family outside the components' ranges (V_l > V_t) says nothing
+            rates.append((float(yp1[j]), y1))
+        if len(rates) == 2:
+            return rates[0][0], rates[1][0], rates[0][1]
+    return None
+
+
+def _balance_rows(system, t0, y) -> list[tuple[float, int, int]]:
+    """(relative rate, equation i, state j) of the balances with one derivative, of a
+    non-accumulator state, largest |F_i| / scale_j at y' = 0 first (``open_balances``'
+    first ranking)."""
+    try:
+        f = system.residual(t0, y, np.zeros(system.n))
+    except (ResidualDomainError, DAEError, PlantError):
+        return []
+    pat = sp.csr_matrix(system.pattern_yp)
+    scale = np.maximum(np.asarray(system.nominal, dtype=float), np.abs(y))
+    rows = []
+    for i in range(pat.shape[0]):
+        cols = pat.indices[pat.indptr[i] : pat.indptr[i + 1]]
+        if cols.size == 1 and not system.accumulator[cols[0]]:
+            rows.append((abs(f[i]) / scale[cols[0]], i, int(cols[0])))
+    return sorted(rows, reverse=True)
 
 
 def no_flow_problems(system, y, count=2) -> list[str]:
