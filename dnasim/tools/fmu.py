@@ -180,6 +180,18 @@ def model_identifier(name: str) -> str:
     return ident
 
 
+def _input_unit(comp, p) -> str:
+    """The SI unit of parameter ``p`` of ``comp`` as an FMU input ("" when it is in
+    the measured signal's unit; the output unit for a PID's z_manual)."""
+    if p.per_signal:
+        return ""
+    if getattr(p, "per_output", 0):
+        from dnasim.core.values import output_unit_of
+
+        return output_unit_of(type(comp), comp.params) or p.unit
+    return p.unit
+
+
 def fmu_interface(loaded, inputs=None, outputs=None, system=None) -> FmuInterface:
     """Resolve the FMU's inputs and outputs of a ``LoadedPlant`` (see the module
     docstring for the defaults). ``outputs`` are names or shell patterns. Raises
@@ -221,7 +233,7 @@ def fmu_interface(loaded, inputs=None, outputs=None, system=None) -> FmuInterfac
     in_units, in_starts = [], []
     for ref in chosen:
         comp, p = _resolve_input(plant, ref)
-        in_units.append(units.get(ref, "" if p.per_signal else p.unit))
+        in_units.append(units.get(ref, _input_unit(comp, p)))
         in_starts.append(float(comp.param_at(p.name, t0)))
         v = comp.params[p.name]
         if callable(v) and not isinstance(v, Constant):
