@@ -50,6 +50,10 @@ def bars(monkeypatch):
             super().close()
             self.closed_ = True
 
+        def update(self, n=1):
+            self.updates = getattr(self, "updates", 0) + 1
+            return super().update(n)
+
     monkeypatch.setattr(progress_module, "_tqdm_class", lambda: Recording)
     return made
 
@@ -63,6 +67,15 @@ def test_simulate_progress_bar_reaches_t_end_and_is_closed(bars):
     assert bar.closed_
     text = bar.fp.getvalue()
     assert "simulating" in text and "100%" in text and "t = 12 s of 12 s" in text
+
+
+def test_many_output_points_update_the_bar_at_most_1000_times(bars):
+    res = simulate(_system(), t_end=10.0, output_interval=0.002, progress=True)
+    assert len(res.t) == 5001
+    (bar,) = bars
+    assert bar.n == 10.0 and bar.closed_
+    # one update each 1/1000 of the run (the points at 0.002 s are 1/5000 apart)
+    assert 900 <= bar.updates <= 1001
 
 
 def test_no_bar_without_progress(bars):

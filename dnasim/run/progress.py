@@ -62,7 +62,9 @@ class Progress:
             return
         span = self.t1 - self.t0
         x = min(max(t - self.t0, 0.0), span) if span > 0 else 1.0
-        if x > self.done:
+        # at most 1000 updates a run (each 1/1000 of it) and the end: a run may hand
+        # over many more output points than a bar can show
+        if x >= self.done + 1e-3 * span or (x == span and x > self.done):
             # the text first (no redraw of its own), then the count: tqdm redraws at
             # most every mininterval; at t1 the count is exactly the total
             self.bar.bar_format = _format(t, self.t1, x / span if span > 0 else 1.0)
