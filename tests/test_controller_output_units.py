@@ -157,5 +157,6 @@ def test_sweep_case_gain_in_output_unit():
     check_cases(spec, [{"fire.Kp": "4 MW/bar"}, {"fire.Kp": "8 MW/bar"}])
     new = apply_case(spec, {"fire.Kp": "8 MW/bar"})
     assert next(c for c in new.components if c.name == "fire").params["Kp"] == 80.0
-    with pytest.raises(CaseError, match="fire.Kp = '4 MW/K'.*unit 'W/Pa'"):
+    with pytest.raises(CaseError, match="fire.Kp = '4 MW/K'.*unit 'W/Pa'") as info:
         check_cases(spec, [{"fire.Kp": "4 MW/K"}])
+    assert "output unit per measured unit: 'W' (the parameter 'unit') per 'Pa'" in str(info.value)

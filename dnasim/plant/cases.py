@@ -376,7 +376,10 @@ def check_cases(spec, cases) -> None:
             try:
                 convert_quantity(value, unit, is_difference(cls, p), atmosphere=spec.atmosphere)
             except UnitError as exc:
-                raise CaseError(f"{key} = {value!r}: {exc}") from None
+                from dnasim.core.values import _unit_hint, output_unit_of
+
+                hint = _unit_hint(cls, p, _signal_units(spec, c), output_unit_of(cls, c.params))
+                raise CaseError(f"{key} = {value!r}: {exc}{hint}") from None
 
 
 # --------------------------------------------------------------------------- applying
