@@ -1,4 +1,4 @@
-"""Packaging (issue 24 item 8): the optional extras (ida, dask, report) are not
+"""Packaging (issue 24 item 8): the optional extras (ida, dask, report, notebook) are not
 imported by ``import dnasim``, and a feature whose extra is missing says which
 extra to install (exit 2 on the command line), while the core still runs.
 
@@ -13,7 +13,12 @@ import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-EXTRAS = {"ida": "sksundae", "dask": "distributed", "report": "plotly"}
+EXTRAS = {
+    "ida": "sksundae",
+    "dask": "distributed",
+    "report": "plotly",
+    "notebook": "ipywidgets",
+}
 
 BLOCK = """
 import sys
@@ -37,7 +42,7 @@ def test_extras_declared_and_not_in_the_core():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     extras = project["optional-dependencies"]
     core = " ".join(project["dependencies"])
-    for extra in ("ida", "dask", "report"):
+    for extra in ("ida", "dask", "report", "notebook"):
         assert extra in extras
         for req in extras[extra]:
             assert req.split(">=")[0].split("[")[0] not in core
@@ -48,6 +53,7 @@ def test_extras_declared_and_not_in_the_core():
 
 def test_import_dnasim_imports_no_optional_or_heavy_module():
     heavy = ("plotly", "dask", "distributed", "sksundae", "tomlkit", "matplotlib", "pandas")
+    heavy += ("tqdm", "ipywidgets")  # the progress bar's, imported when a bar is asked for
     out = python(
         f"import sys, dnasim\nprint(sorted(m for m in sys.modules if m.split('.')[0] in {heavy!r}))"
     )

@@ -31,6 +31,7 @@ HEAVY = (
     "pandas",
     "xarray",
     "networkx",
+    "tqdm",  # the progress bar's: only when a bar is drawn (dnasim.run.progress)
 )
 
 # Runs argv through the console script's entry point; prints the heavy modules loaded.
@@ -90,4 +91,4 @@ def test_run_of_a_gas_plant_imports_no_kernels_plots_or_frames(tmp_path):
     assert (tmp_path / "results.nc").is_file()
     assert "h5py" in top
     assert top.isdisjoint({"numba", "llvmlite", "CoolProp", "matplotlib", "pandas"})
-    assert top.isdisjoint({"xarray", "networkx"})
+    assert top.isdisjoint({"xarray", "networkx", "tqdm"})  # -q: no progress bar

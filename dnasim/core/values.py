@@ -34,10 +34,12 @@ __all__ = [
     "example",
     "is_difference",
     "limit_message",
+    "output_unit_of",
     "param_kind",
     "param_unit",
     "param_unit_for",
     "param_value",
+    "per_output",
     "per_signal",
     "quantity",
     "suggest",
@@ -140,13 +142,44 @@ def per_signal(cls, p) -> int:
     return int(getattr(p, "per_signal", 0) or 0)
 
 
-def param_unit_for(cls, p, signal_units=()) -> str:
+def per_output(cls, p) -> int:
+    """The power of the component's output unit in ``p``'s unit (a PID's Kp, z_max: 1)."""
+    return int(getattr(p, "per_output", 0) or 0)
+
+
+def output_unit_of(cls, params) -> str | None:
+    """The SI unit of the output of a ``cls`` component with the parameters ``params``
+    (a plant file's table, a spec's or the Python keywords): the string parameter
+    named by ``cls.OUTPUT_UNIT_PARAM`` (a PID's ``unit``), its default when not given.
+    ``None`` when the class declares none or the value is not a unit (that parameter's
+    own check reports it)."""
+    name = getattr(cls, "OUTPUT_UNIT_PARAM", None)
+    if not name:
+        return None
+    value = params.get(name) if params is not None else None
+    if value is None:
+        value = next((q.default for q in getattr(cls, "PARAMS", ()) if q.name == name), None)
+    if not isinstance(value, str):
+        return None
+    try:
+        parse_unit(value)
+    except UnitError:
+        return None
+    return value
+
+
+def param_unit_for(cls, p, signal_units=(), output_unit=None) -> str:
     """The SI unit a plant-file value of ``p`` is converted to: the declared unit,
-    times the measured signal's unit to the power ``per_signal`` (Kp of a
-    temperature controller: 1/K)."""
+    times the component's output unit (``output_unit``, :func:`output_unit_of`) when
+    ``p.per_output``, times the measured signal's unit to the power ``per_signal``
+    (Kp of a temperature controller: 1/K; of a pressure controller whose output is a
+    heat flow in W: W/Pa)."""
     unit = param_unit(p)
     if unit.startswith("delta_"):
         unit = unit[len("delta_") :]
+    if per_output(cls, p) and output_unit and parse_unit(output_unit).dims != parse_unit("1").dims:
+        s_out = output_unit if re.fullmatch(r"[A-Za-z0-9/]+", output_unit) else f"({output_unit})"
+        unit = s_out if unit == "1" else f"({unit}).{s_out}"
     k = per_signal(cls, p)
     su = next((u for u in signal_units if u), None)
     if k and su is not None and parse_unit(su).dims != parse_unit("1").dims:
@@ -158,8 +191,37 @@ def param_unit_for(cls, p, signal_units=()) -> str:
     return unit
 
 
+def _unit_hint(cls, p, signal_units=(), output_unit=None) -> str:
+    """Where the unit of a parameter in the units of the component's signals comes
+    from, for a message about a value in the wrong unit ("" for other parameters):
+    a gain is in the output unit per the measured unit."""
+    k_in, k_out = per_signal(cls, p), per_output(cls, p)
+    if not (k_in or k_out):
+        return ""
+    measured = next((u for u in signal_units if u), None)
+    name = getattr(cls, "OUTPUT_UNIT_PARAM", None)
+    out = f"'{output_unit or '1'}'" + (f" (the parameter '{name}')" if name else "")
+    inp = f"'{measured}' (the measured signal)" if measured else "the measured signal's unit"
+    if k_in < 0:
+        what = f"output unit per measured unit: {out} per {inp}"
+    elif k_in > 0:
+        what = f"the measured signal's unit, {inp}"
+    else:
+        what = f"the output unit, {out}"
+    return f"; {p.name} is in {what}"
+
+
 def quantity(
-    v, unit, errors, table, key, *, difference=False, lenient_difference=False, atmosphere=None
+    v,
+    unit,
+    errors,
+    table,
+    key,
+    *,
+    difference=False,
+    lenient_difference=False,
+    atmosphere=None,
+    hint="",
 ) -> float | None:
     """A number or unit string in ``unit`` (SI); ``None`` after reporting an error.
 
@@ -168,7 +230,8 @@ def quantity(
     and so is "2 barg" (a gauge pressure). ``lenient_difference``: a difference where
     "10 degC" may mean 10 K (the amplitude of a sine next to its mean in degC).
     ``atmosphere`` [Pa]: the zero of the gauge units ("5 barg"); ``None``: the
-    standard atmosphere (``dnasim.core.units.STANDARD_ATMOSPHERE``).
+    standard atmosphere (``dnasim.core.units.STANDARD_ATMOSPHERE``). ``hint``: added
+    to the message of a value in the wrong unit.
     """
     if isinstance(v, dict | list):
         errors.add(
@@ -181,7 +244,7 @@ def quantity(
     try:
         return convert_quantity(v, unit, difference, lenient_difference, atmosphere)
     except UnitError as exc:
-        errors.add(table, key, str(exc))
+        errors.add(table, key, str(exc) + hint)
         return None
 
 
@@ -318,13 +381,16 @@ def time_function(
     return f
 
 
-def param_value(value, p, errors, table, key, signal_units=(), cls=None, atmosphere=None):
+def param_value(
+    value, p, errors, table, key, signal_units=(), cls=None, atmosphere=None, output_unit=None
+):
     """``value`` of parameter ``p`` as its SI value (a float, int, string, bool or time
     function), checked by ``p``'s rules; ``None`` after adding a problem to ``errors``.
     ``atmosphere`` [Pa]: the zero of gauge pressures ("5 barg"), ``None`` the standard
-    atmosphere."""
+    atmosphere. ``output_unit``: the component's output unit (``output_unit_of``), for
+    the parameters in it (``Param.per_output``)."""
     kind = param_kind(p)
-    unit = param_unit_for(cls, p, signal_units)
+    unit = param_unit_for(cls, p, signal_units, output_unit)
     difference = is_difference(cls, p)
     if kind == "string":
         if not isinstance(value, str):
@@ -356,7 +422,16 @@ def param_value(value, p, errors, table, key, signal_units=(), cls=None, atmosph
             )
             return None
         return time_function(value, p, errors, table, key, unit, difference, atmosphere)
-    x = quantity(value, unit, errors, table, key, difference=difference, atmosphere=atmosphere)
+    x = quantity(
+        value,
+        unit,
+        errors,
+        table,
+        key,
+        difference=difference,
+        atmosphere=atmosphere,
+        hint=_unit_hint(cls, p, signal_units, output_unit),
+    )
     if x is None:
         return None
     if kind in ("int", "integer"):

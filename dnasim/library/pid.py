@@ -64,13 +64,32 @@ class PIDController(Component):
 
     Per-unit gains: give ``Kc`` [1] and ``measured_span`` [m] instead of Kp; then
     Kp = Kc * output_span / measured_span, output_span = z_max - z_min unless given.
+
+    Units: with ``unit`` the output's SI unit ("W" for a firing rate), Kp may be
+    written in the output unit per measured unit (Kp = "4 MW/bar" of a pressure
+    controller is 40 W/Pa) and z_min, z_max, output_span, z_manual and integral0 in
+    the output unit ("200 MW"); numbers are SI. A value of another dimension is refused
+    with the unit expected.
     """
 
     PARAMS = (
-        Param("Kp", "1", None, "proportional gain [output unit per measured unit]", per_signal=-1),
+        Param(
+            "Kp",
+            "1",
+            None,
+            "proportional gain [output unit per measured unit]",
+            per_signal=-1,
+            per_output=1,
+        ),
         Param("Kc", "1", None, "per-unit gain (instead of Kp; needs measured_span)"),
         Param("measured_span", "1", None, "span of the measured signal (per unit)", per_signal=1),
-        Param("output_span", "1", None, "span of the output (per unit; default z_max - z_min)"),
+        Param(
+            "output_span",
+            "1",
+            None,
+            "span of the output (per unit; default z_max - z_min) [output unit]",
+            per_output=1,
+        ),
         Param("T_i", "s", None, "integral time (not given: no integral part)", min=0.0),
         Param("T_d", "s", 0.0, "derivative time (0: no D part)", min=0.0),
         Param("N", "1", 10.0, "derivative filter: time constant T_d/N", min=0.0),
@@ -84,8 +103,8 @@ class PIDController(Component):
             time_function=True,
             per_signal=1,
         ),
-        Param("z_min", "1", 0.0, "lower output limit [output unit]"),
-        Param("z_max", "1", 1.0, "upper output limit [output unit]"),
+        Param("z_min", "1", 0.0, "lower output limit [output unit]", per_output=1),
+        Param("z_max", "1", 1.0, "upper output limit [output unit]", per_output=1),
         Param("unit", "1", "1", 'unit of the output z (SI, e.g. "1", "kg/s")', kind="string"),
         Param(
             "error_sign",
@@ -109,8 +128,21 @@ class PIDController(Component):
             min=0.0,
             max=1.0,
         ),
-        Param("z_manual", "1", None, "manual output when tracking = false", time_function=True),
-        Param("integral0", "1", 0.0, "initial integral part m_I (given start)"),
+        Param(
+            "z_manual",
+            "1",
+            None,
+            "manual output when tracking = false [output unit]",
+            time_function=True,
+            per_output=1,
+        ),
+        Param(
+            "integral0",
+            "1",
+            0.0,
+            "initial integral part m_I (given start) [output unit]",
+            per_output=1,
+        ),
         Param(
             "measured_nominal",
             "1",
@@ -131,6 +163,9 @@ class PIDController(Component):
     )
     SIGNAL_OUTPUTS = (SignalPort("z", "1", "limited output", variable="z"),)
     USES_MEDIUM = False
+    #: the parameter holding the output's unit: Kp, the limits and the manual value
+    #: may be written in it ("4 MW/bar", "200 MW" with unit = "W"; ``Param.per_output``)
+    OUTPUT_UNIT_PARAM = "unit"
 
     def setup(self):
         P = self.params
@@ -138,12 +173,17 @@ class PIDController(Component):
         if not P["z_max"] > P["z_min"]:
             raise PlantError(f"component '{name}': z_max must be greater than z_min")
         span_out = P["output_span"] if P["output_span"] is not None else P["z_max"] - P["z_min"]
-        if (P["Kp"] is None) == (P["Kc"] is None):
+        # given with a unit of the measured signal ("4 MW/bar"): converted once the link
+        # is known (``Component.resolve_signal_units``, which runs this setup again)
+        deferred = self.signal_unit_values
+        if (P["Kp"] is None and "Kp" not in deferred) == (P["Kc"] is None):
             raise PlantError(
                 f"component '{name}': give the gain as Kp [output unit per measured unit] or as "
                 "the per-unit gain Kc with measured_span, one of them"
             )
-        if P["Kc"] is not None:
+        if P["Kc"] is not None and "measured_span" in deferred:
+            self.Kp = None  # until measured_span is in SI
+        elif P["Kc"] is not None:
             if not P["measured_span"] or P["measured_span"] <= 0:
                 raise PlantError(
                     f"component '{name}': the per-unit gain Kc needs measured_span > 0"

@@ -230,6 +230,9 @@ class Component:
                 self.signal_unit_values[p.name] = value
                 self.params[p.name] = None
                 continue
+            if p.per_output and _has_unit_text(value):
+                # in the output unit ("200 MW" for a PID whose unit is "W"): known now
+                value = self._in_output_unit(p, value, params)
             self.params[p.name] = self._validate(p, value)
         self.medium = None  # set by dnasim.compilation.compiler (dnasim.media medium object)
         self.medium_name = self.params.get("medium")
@@ -294,6 +297,26 @@ class Component:
         v = _check_number(self.name, p, value)
         return as_time_function(v) if p.time_function else v
 
+    def _in_output_unit(self, p: Param, value, params: dict):
+        """``value`` of a parameter in the component's output unit (``Param.per_output``)
+        in SI, converted as a plant file's; PlantError naming component and parameter."""
+        from dnasim.core.values import output_unit_of, param_value
+
+        errors = Problems(f"component '{self.name}' ({type(self).__name__})")
+        x = param_value(
+            value,
+            p,
+            errors,
+            (),
+            p.name,
+            (),
+            type(self),
+            self.atmosphere,
+            output_unit=output_unit_of(type(self), params),
+        )
+        errors.raise_if_any()
+        return x
+
     def resolve_signal_units(self, signal_units) -> None:
         """Convert the parameters given with a unit whose SI unit depends on the linked
         signal (``Param.per_signal``: a controller's gain "0.5 1/K" or "2 %/bar", its
@@ -303,19 +326,31 @@ class Component:
         Raises PlantError naming the component and the parameter."""
         if not self.signal_unit_values:
             return
-        from dnasim.core.values import param_value
+        from dnasim.core.values import output_unit_of, param_value
 
         known = {p.name: p for p in self.PARAMS}
         errors = Problems(f"component '{self.name}' ({type(self).__name__})")
+        out_unit = output_unit_of(type(self), self.params)
         for name, raw in self.signal_unit_values.items():
             p = known[name]
             x = param_value(
-                raw, p, errors, (), name, list(signal_units), type(self), self.atmosphere
+                raw,
+                p,
+                errors,
+                (),
+                name,
+                list(signal_units),
+                type(self),
+                self.atmosphere,
+                output_unit=out_unit,
             )
             if x is not None:
                 self.params[name] = self._validate(p, x)
         errors.raise_if_any()
         self.signal_unit_values = {}
+        # the component's own checks and derived values (a PID's Kp from Kc and
+        # measured_span) again, now with these values
+        self.setup()
 
     def _validate_array(self, p: Param, value):
         """A non-empty list of numbers (or unit strings) in ``p.unit``, each checked

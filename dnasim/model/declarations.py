@@ -65,6 +65,11 @@ class Param:
     #: the power of the measured signal's unit in this parameter's unit: a
     #: controller gain [output unit per measured unit] is -1, a set point 1
     per_signal: int = 0
+    #: the power (0 or 1) of the component's output unit in this parameter's unit: the
+    #: output unit is the string parameter the class names in ``OUTPUT_UNIT_PARAM``
+    #: (a PID controller's ``unit``: "W" for a firing rate); its gain Kp "4 MW/bar"
+    #: [W/Pa] and its limits "200 MW" [W] are 1
+    per_output: int = 0
 
     def range_problem(self, x: float) -> tuple[str, str] | None:
         """The one range check of a parameter value x [SI], used by the Python API

@@ -320,8 +320,8 @@ def _signal_units(spec, c) -> tuple:
 
 def case_units(spec, keys) -> dict[str, str]:
     """The SI unit of each case key ("steam.T" -> "K"); "" for strings and booleans."""
+    from dnasim.core.values import output_unit_of, param_unit_for
     from dnasim.core.values import param_kind as _param_kind
-    from dnasim.core.values import param_unit_for
 
     units = {}
     for key in keys:
@@ -332,7 +332,7 @@ def case_units(spec, keys) -> dict[str, str]:
         c, cls, p = _parameter(spec, key)
         kind = _param_kind(p)
         units[key] = (
-            param_unit_for(cls, p, _signal_units(spec, c))
+            param_unit_for(cls, p, _signal_units(spec, c), output_unit_of(cls, c.params))
             if kind in ("number", "float", "int", "integer")
             else ""
         )
@@ -376,7 +376,10 @@ def check_cases(spec, cases) -> None:
             try:
                 convert_quantity(value, unit, is_difference(cls, p), atmosphere=spec.atmosphere)
             except UnitError as exc:
-                raise CaseError(f"{key} = {value!r}: {exc}") from None
+                from dnasim.core.values import _unit_hint, output_unit_of
+
+                hint = _unit_hint(cls, p, _signal_units(spec, c), output_unit_of(cls, c.params))
+                raise CaseError(f"{key} = {value!r}: {exc}{hint}") from None
 
 
 # --------------------------------------------------------------------------- applying
@@ -387,6 +390,7 @@ def apply_case(spec, case: dict[str, Any]):
     a plant file); raises ``PlantError`` naming the component and key, e.g.
     ``plant.toml, [components.valve], key 'C': -1 is out of the physical range``."""
     from dnasim.core.errors import Problems
+    from dnasim.core.values import output_unit_of
     from dnasim.core.values import param_value as _param_value
     from dnasim.plant.plantfile import _simulation
 
@@ -413,11 +417,17 @@ def apply_case(spec, case: dict[str, Any]):
             _signal_units(new, c),
             cls,
             atmosphere=new.atmosphere,
+            output_unit=output_unit_of(cls, {**c.params, **_case_params(case, cname)}),
         )
         c.params[pname] = x
         c.instance = None  # built again from the new parameters
     errors.raise_if_any()
     return new
+
+
+def _case_params(case: dict[str, Any], cname: str) -> dict[str, Any]:
+    """The case's values of component ``cname``'s parameters, by parameter name."""
+    return {k.partition(".")[2]: v for k, v in case.items() if k.partition(".")[0] == cname}
 
 
 def _case_text(case: dict[str, Any]) -> str:

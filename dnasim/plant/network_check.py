@@ -128,6 +128,12 @@ def _link_dimension_problem(dest: ComponentSpec, inp: str, src, out: str, have: 
         if q_out is None:
             return None
         have = str(getattr(q_out, "unit", "1") or "1")
+        if src.instance is None and getattr(src.cls, "OUTPUT_UNIT_PARAM", None):
+            # not built (its own parameters are in error): the output's unit is the
+            # unit parameter's, not the class's placeholder
+            from dnasim.core.values import output_unit_of
+
+            have = output_unit_of(src.cls, src.params) or "*"
     return dimension_problem(
         f"{src_name}.{out}",
         have,

@@ -44,6 +44,7 @@ from dnasim.core.values import (
     TIME_FUNCTION_TYPES,
     example,
     limit_message,
+    output_unit_of,
     param_kind,
     param_unit,
     param_value,
@@ -483,7 +484,15 @@ def _component(
             unchecked_keys.append(key)
             continue
         spec.params[key] = param_value(
-            value, p, errors, table, key, signal_units, cls, atmosphere=atmosphere
+            value,
+            p,
+            errors,
+            table,
+            key,
+            signal_units,
+            cls,
+            atmosphere=atmosphere,
+            output_unit=output_unit_of(cls, table_data),
         )
         if key == "medium" and isinstance(spec.params[key], str):
             _check_medium(spec.params[key], errors, table, key)

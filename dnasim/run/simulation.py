@@ -149,9 +149,10 @@ def simulate(
 
     sinks: output writers (``CSVSink``, ...); callback(t, y, yp): called at every
     output point (with t_eval one point late: the next point says whether the state
-    after a jump at that time follows). progress: one line on stderr, redrawn in
-    place (percentage of t_end reached, simulated time, an estimate of the time left;
-    shown in a terminal only). throw: raise ``DAEError`` (with ``err.result``)
+    after a jump at that time follows). progress: a progress bar (tqdm,
+    ``dnasim.run.progress``: percentage of t_end reached, simulated time, an estimate
+    of the time left): one line on stderr redrawn in place, the notebook's widget in
+    Jupyter with ipywidgets. throw: raise ``DAEError`` (with ``err.result``)
     instead of returning Results with success False.
     """
     from dnasim.start.initial import reinitialise

@@ -536,8 +536,9 @@ def sweep(
     out_dir: the sweep directory (default: a new temporary directory); cases done
     there before with the same values and the same plant (``plant_fingerprint``)
     are skipped, the others run (again). output_interval [s]: rows of each case's
-    results.csv and the time grid of sweep.nc. progress: a progress bar (default:
-    when stdout is a terminal).
+    results.csv and the time grid of sweep.nc. progress: a progress bar of the cases
+    (tqdm: on stdout in a terminal, the widget in Jupyter; default: when stdout is a
+    terminal).
 
     Raises ``dnasim.plant.cases.CaseError`` for an unknown component or parameter, a
     value of the wrong unit or more output points than allowed (before anything
@@ -608,7 +609,7 @@ def sweep(
         raise output_failure(exc, out, cases, fingerprint) from None
     finally:
         if bar is not None:
-            bar.__exit__(None, None, None)
+            bar.close()
     try:
         summary, dataset = collect(
             spec, cases, out, output_interval=output_interval, fingerprint=fingerprint
@@ -627,11 +628,11 @@ def sweep(
 
 
 def _bar(n: int):
-    import click
+    """The cases' progress bar (tqdm.auto: text on stdout in a terminal, the notebook
+    widget in Jupyter, as ``dnasim.run.progress``); ``update(1)`` a case, ``close()``."""
+    from dnasim.run.progress import _tqdm_class
 
-    bar = click.progressbar(length=n, label="cases", show_eta=True, show_pos=True, width=30)
-    bar.__enter__()
-    return bar
+    return _tqdm_class()(total=n, desc="cases", unit="case", file=sys.stdout, leave=True)
 
 
 # --------------------------------------------------------------------------- collecting
