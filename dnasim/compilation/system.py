@@ -109,11 +109,6 @@ from dnasim.model.physics import upwind_weight
 
 NODE_P_NOMINAL = 1e5  # Pa
 NODE_H_NOMINAL = 1e5  # J/kg
-#: relative widening of the range a node's enthalpy is held in for the components
-#: (``System._bounded_node_h``): wide enough that no finite-difference increment and no
-#: ordinary Newton iterate next to a solution on the range's edge (upwind: h_node =
-#: the upstream h_out) meets it (1e3 J/kg on water at 1 MJ/kg)
-HULL_MARGIN_REL = 1e-3
 
 
 class ComponentBlock:
@@ -395,12 +390,6 @@ class System:
         self._mix_band = e[:, 5] if (narrower.any() or len(eps_vars)) else None
         self._node_h = np.array([self.node_index[nd] + 1 for nd in node_names], dtype=np.intp)
         self._mix_hnode = self._node_h[self._mix_node]
-        # the nodes with ports, and where each one's entries start (entries are made
-        # node by node): the bounds of ``_bounded_node_h``
-        counts = np.bincount(self._mix_node, minlength=n_nodes)
-        self._hull_nodes = np.flatnonzero(counts > 0)
-        self._hull_starts = (np.cumsum(counts) - counts)[self._hull_nodes].astype(np.intp)
-        self._hull_h = self._node_h[self._hull_nodes]
         self.n_nodes = n_nodes
         self.node_matrix = sp.csr_matrix(
             (self._mix_sign, (self._mix_node, self._mix_flow)), shape=(n_nodes, n)
@@ -482,7 +471,7 @@ class System:
     def residual(self, t, y, yp):
         """F(t, y, y') for the whole plant (length n)."""
         F = np.empty(self.n_equations)
-        self._component_rows(t, self._bounded_node_h(y), yp, F, self.residual_units)
+        self._component_rows(t, y, yp, F, self.residual_units)
         self._node_rows(y, F)
         self._checked_lengths = True
         self._check_finite(t, F)
@@ -519,7 +508,7 @@ class System:
 
         def F_cols(t, y, yp, f0):
             F = np.array(f0, dtype=float)
-            self._component_rows(t, self._bounded_node_h(y), yp, F, blocks)
+            self._component_rows(t, y, yp, F, blocks)
             if nodes:
                 self._node_rows(y, F)
             self._check_finite(t, F)
@@ -554,34 +543,6 @@ class System:
                         f"but declares {ne} equations"
                     )
             F[b.eq_slice] = r
-
-    def _bounded_node_h(self, y):
-        """y with each node's enthalpy held within the range of the enthalpies its
-        ports deliver (``FluidPort.h_out``), widened by HULL_MARGIN_REL of that range and
-        of their magnitude: what the components read (the node equations read y).
-
-        A solution of the mixing equation is a weighted mean of the delivered
-        enthalpies with positive weights, so it lies inside that range and the
-        components see it unchanged: the bound acts only on Newton iterates and
-        predictions, never on a converged state. It is what keeps them inside the
-        medium's range where the mixed enthalpy is steep in a flow: at a node between
-        two very different enthalpies whose flows lie inside the upwind band, h_node
-        moves by (h_a - h_b) 4/(3 eps) per kg/s (1.3e9 J/kg per kg/s at the outlet of
-        tests/field/closed_feed_line_boiling.toml), and one Newton update of 0.01 kg/s
-        took it to 13.9 MJ/kg, outside IF97's range, for every step size."""
-        if self._hull_nodes.size == 0:
-            return y
-        hout = y[self._mix_hout]
-        lo = np.minimum.reduceat(hout, self._hull_starts)
-        hi = np.maximum.reduceat(hout, self._hull_starts)
-        h = y[self._hull_h]
-        margin = HULL_MARGIN_REL * ((hi - lo) + np.maximum(np.abs(lo), np.abs(hi)))
-        below, above = h < lo - margin, h > hi + margin
-        if not (below.any() or above.any()):
-            return y  # the usual case: nothing to bound, y itself
-        y = np.array(y, dtype=float)
-        y[self._hull_h] = np.where(below, lo - margin, np.where(above, hi + margin, h))
-        return y
 
     def _node_rows(self, y, F) -> None:
         """F[node rows]: the mass balances sum_k n_k (the rows of ``node_matrix``,
