@@ -8,6 +8,12 @@ isolation valves) whose wall cools from 300 to 150 degC. The closed line keeps i
 M and volume V, so its density rho = M/V; it ends at the wall temperature, inside the
 dome, where IF97 gives p = p_sat(150 degC), and its specific internal energy is the
 mixture's u = (1 - x) u' + x u'' with x = (1/rho - v')/(v'' - v') at 150 degC.
+
+tests/field/closed_feed_line_boiling_outlet.toml: a feed line shut at its inlet, open to
+a drum at 50 bar, its wall heated to 320 degC: the water boils at near-zero flow and the
+line ends as steam at the drum's pressure and the wall's temperature (IF97 from p and h,
+and its mass rho(p, T) V). The same plant with the default LMTD heat transfer
+(closed_feed_line_boiling.toml) does not yet run to its end: its header says why.
 """
 
 from __future__ import annotations
