@@ -8,6 +8,12 @@ isolation valves) whose wall cools from 300 to 150 degC. The closed line keeps i
 M and volume V, so its density rho = M/V; it ends at the wall temperature, inside the
 dome, where IF97 gives p = p_sat(150 degC), and its specific internal energy is the
 mixture's u = (1 - x) u' + x u'' with x = (1/rho - v')/(v'' - v') at 150 degC.
+
+tests/field/closed_feed_line_boiling_outlet.toml: a feed line shut at its inlet, open to
+a drum at 50 bar, its wall heated to 320 degC: the water boils at near-zero flow and the
+line ends as steam at the drum's pressure and the wall's temperature (IF97 from p and h,
+and its mass rho(p, T) V). The same plant with the default LMTD heat transfer
+(closed_feed_line_boiling.toml) does not yet run to its end: its header says why.
 """
 
 from __future__ import annotations
@@ -75,3 +81,56 @@ def test_closed_steam_line_condenses_at_rest(condensing):
     for i in range(5):
         assert abs(df[f"line.T[{i}]"].iloc[-1] - T_wall) < 1e-3
     assert U[-1] / M[-1] == pytest.approx(u_hand, rel=1e-5)
+
+
+# ------------------------------------------------------------------ boiling at rest
+
+
+@pytest.fixture(scope="module")
+def boiling(tmp_path_factory):
+    outdir = tmp_path_factory.mktemp("cflb")
+    return run_plant("closed_feed_line_boiling_outlet", outdir), outdir
+
+
+def test_closed_feed_line_boils_at_rest_and_ends_superheated(boiling):
+    # tests/field/closed_feed_line_boiling_outlet.toml: a feed line shut at its inlet,
+    # open to a 50 bar drum, its wall heated from 200 to 320 degC: the water boils at
+    # near-zero flow, is pushed out, and the line ends full of steam at the drum's
+    # pressure and the wall's temperature (the same plant with the default LMTD heat
+    # transfer stalls: its header, issue 20 item 9)
+    run, outdir = boiling
+    assert run.finished, run.message
+    bal = balances(run)
+    # the field suite's bound: the integrator conserves M and U to its Newton tolerance
+    assert bal.mass_err < BALANCE_RTOL and bal.energy_err < BALANCE_RTOL, bal
+    # every volume boiled through the dome, entering it at h' and leaving it at h'', as
+    # located phase switches (16 of them: the outflow's pulses take some volumes back
+    # and forth across a line), the last one of each volume at h''
+    ev = pd.read_csv(outdir / "events.csv").drop_duplicates("event", keep="last")
+    line = ev.loc[ev["component"] == "line"].sort_values("time")
+    expected = {f"h_v[{i}] saturated {s}" for i in range(5) for s in ("liquid", "vapour")}
+    assert set(line["switch"]) == expected, sorted(set(line["switch"]))
+    for i in range(5):
+        mine = line[line["switch"].str.startswith(f"h_v[{i}] ")]
+        assert mine["switch"].iloc[-1] == f"h_v[{i}] saturated vapour", mine
+    last = run.df.iloc[-1]
+    p_drum, T_wall, V = 50e5, 320.0 + 273.15, 0.2
+    M = sum(last[f"line.M[{i}]"] for i in range(5))
+    for i in range(5):
+        p, h = last[f"line.p_v[{i}]"], last[f"line.h_v[{i}]"]
+        # at rest the line's pressure is the drum's: no flow, no friction (measured
+        # 5e6 Pa to 8 digits); 1e-6 is the integrator's tolerance
+        assert p == pytest.approx(p_drum, rel=1e-6)
+        # superheated steam at the wall temperature, by IF97 from (p, h): the first
+        # four volumes within 2e-3 K (measured); the last one, next to the open drum
+        # valve, 0.117 K below the wall (measured): the valve's regularised exchange at
+        # zero flow (physics.upwind_weight, w(0) = 3/16 m_eps) brings in the drum
+        # water's enthalpy, kA_i dT = 2 kW/K x 0.117 K = 234 W. Bounds: ~2.5 times these.
+        T = PropsSI("T", "P", p, "H", h, WATER)
+        assert abs(T - T_wall) < (0.3 if i == 4 else 5e-3), (i, T)
+    # the mass left in the line is steam at (p_drum, T_wall): rho V, by IF97 (measured
+    # 6.5e-5 above it, from the last volume's 0.117 K)
+    rho = PropsSI("D", "P", p_drum, "T", T_wall, WATER)
+    assert M == pytest.approx(rho * V, rel=2e-4)
+    # less than the saturated vapour's mass at 50 bar: no liquid is left
+    assert M < PropsSI("D", "P", p_drum, "Q", 1, WATER) * V
