@@ -5,6 +5,7 @@
     .venv/bin/python benchmarks/plant_scaling.py --no-ida
     .venv/bin/python benchmarks/plant_scaling.py --geometry      # the pipe from geometry
     .venv/bin/python benchmarks/plant_scaling.py --sizes 1000 10000 --wall sine --no-ida
+    .venv/bin/python benchmarks/plant_scaling.py --sizes 1000 --wall sine --no-ida --split
     .venv/bin/python benchmarks/plant_scaling.py --sizes 1000 --medium "IF97-TABLES::Water"
 
 Plant: steam reservoir (50 bar, 500 C, stepping to 520 C at t = 1 s) -> Pipe
@@ -32,6 +33,13 @@ the same plant on the bicubic IF97 tables (dnasim.media.if97_tables). N = 10000 
 two 5000-volume pipes in series (``--sizes 10000``; a Pipe has at most 5000 volumes;
 not in the default list: minutes of CPU).
 
+``--split``: a second table, dnasim's residual evaluations by purpose (the Newton
+iterations, the finite-difference Jacobians' column groups, the settling of the
+quadratures whose rows the Jacobian leaves out: ``IterationMatrix``'s ``quadrature``),
+Jacobians, evaluations per Jacobian, Newton iterations per step, rejected steps, and
+the steady start's evaluations, CPU and peak-memory growth, with the CPU per simulated
+second of start and run together (the first table's CPU is the run's alone).
+
 ``--geometry``: the same pipe described by its geometry instead (issue 22): D = 0.1 m,
 length 20 m, a 5 mm carbon-steel wall (its mass and c(T), lambda(T)), Darcy-Weisbach
 with Colebrook and Gnielinski's (VDI G1) heat transfer from the steam's IAPWS transport
@@ -54,7 +62,6 @@ from dnasim.core.timefunctions import Sine, Step
 from dnasim.library import Pipe, PressureBoundary, Valve
 from dnasim.media import get_medium
 from dnasim.plant.plant import Plant
-from dnasim.start.initial import initial_values
 
 T_END = 60.0
 
@@ -162,12 +169,63 @@ class PropertyTimer:
         self.evaluations = self.medium.n_evaluations - self.evaluations
 
 
+class EvaluationSplit:
+    """Where dnasim's residual evaluations go (``--split``): the finite-difference
+    Jacobians' column groups (``IterationMatrix.finite_difference``), the settling of
+    the quadratures whose rows the matrix leaves out (``trailing_residual``, one a
+    converged corrector), and the rest, the Newton iterations (their first residual
+    at the predictor included). Counted by wrapping the two methods."""
+
+    def __enter__(self):
+        from dnasim.solver import linear_algebra as la
+
+        self.la, self.fd, self.settle = la, 0, 0
+        self.saved = la.IterationMatrix.finite_difference, la.IterationMatrix.trailing_residual
+        split = self
+
+        def fd(matrix, *args, **kwargs):
+            stats = getattr(matrix.residual, "stats", None)  # IDA's restarts: none
+            if stats is None:
+                return split.saved[0](matrix, *args, **kwargs)
+            before = stats.residual_evals
+            try:
+                return split.saved[0](matrix, *args, **kwargs)
+            finally:
+                split.fd += stats.residual_evals - before
+
+        def settle(matrix, *args, **kwargs):
+            split.settle += 1
+            return split.saved[1](matrix, *args, **kwargs)
+
+        la.IterationMatrix.finite_difference = fd
+        la.IterationMatrix.trailing_residual = settle
+        return self
+
+    def __exit__(self, *exc):
+        self.la.IterationMatrix.finite_difference = self.saved[0]
+        self.la.IterationMatrix.trailing_residual = self.saved[1]
+
+
+def steady_start(dae):
+    """The steady start (``find_steady_state``): (y0, yp0) and its CPU [s], residual
+    evaluations and the growth of the peak resident memory [MB] (ru_maxrss)."""
+    import resource
+
+    from dnasim.start.steady_state import find_steady_state
+
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    rest = find_steady_state(dae, 0.0)
+    grew = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss) / 1024.0
+    return rest.y, rest.yp, {"cpu": rest.stats.cpu, "fevals": rest.stats.residual_evals, "MB": grew}
+
+
 def run(n, solver, rtol=1e-6, linsolver=None, geometry=False, wall="storage"):
     plant = steam_pipe(n, geometry, wall)
     dae = plant.compile()
-    y0, yp0 = initial_values(dae, 0.0, "steady")
+    y0, yp0, start = steady_start(dae)
     water = get_medium(MEDIUM["name"])
-    with PropertyTimer(water) as timer:
+    split = EvaluationSplit()
+    with PropertyTimer(water) as timer, split:
         t0 = time.process_time()
         w0 = time.perf_counter()
         if solver == "dnasim":
@@ -222,6 +280,12 @@ def run(n, solver, rtol=1e-6, linsolver=None, geometry=False, wall="storage"):
         "prop_points": timer.evaluations,
         "T_out": T_out,
         "ok": bool(res.success),
+        "start": start,
+        "jacobians": res.stats.get("jac_evals", 0),  # (dnasim's counters; IDA's differ)
+        "newton_iters": res.stats.get("newton_iters", 0),
+        "rejected": res.stats.get("rejected_error", 0) + res.stats.get("rejected_newton", 0),
+        "fd_evals": split.fd,
+        "settle_evals": split.settle,
     }
 
 
@@ -240,6 +304,11 @@ def main(argv=None):
     )
     ap.add_argument("--medium", default="Water", help='the water medium, e.g. "IF97-TABLES::Water"')
     ap.add_argument("--t-end", type=float, default=T_END, help="simulated time [s] (60)")
+    ap.add_argument(
+        "--split",
+        action="store_true",
+        help="also print dnasim's residual evaluations by purpose and the steady start",
+    )
     args = ap.parse_args(argv)
     ap_t = args.t_end
     MEDIUM["name"] = args.medium
@@ -282,6 +351,36 @@ def main(argv=None):
         if args.json:
             with open(args.json, "w") as f:
                 json.dump(rows, f, indent=1)
+    if args.split:
+        print_split(rows)
+    return 0
+
+
+def print_split(rows):
+    """dnasim's residual evaluations by purpose (``EvaluationSplit``) and the steady
+    start's work, per N; the CPU of the run with the start's (the start is outside the
+    table above's CPU) per simulated second."""
+    print()
+    head = (
+        f"{'N':>5} {'F evals':>8} {'Newton':>7} {'FD Jac':>7} {'settle':>7} {'Jacs':>5} "
+        f"{'F/Jac':>6} {'iters/step':>10} {'rejected':>8} | {'start F':>7} {'start CPU s':>11} "
+        f"{'start MB':>8} {'CPU s/sim-s with start':>22}"
+    )
+    print(head)
+    print("-" * len(head))
+    for row in rows:
+        r = row["dnasim"]
+        newton = r["fevals"] - r["fd_evals"] - r["settle_evals"]
+        per_jac = r["fd_evals"] / max(r["jacobians"], 1)
+        st = r["start"]
+        print(
+            f"{row['N']:>5} {r['fevals']:>8} {newton:>7} {r['fd_evals']:>7} "
+            f"{r['settle_evals']:>7} {r['jacobians']:>5} {per_jac:>6.1f} "
+            f"{r['newton_iters'] / max(r['steps'], 1):>10.2f} {r['rejected']:>8} | "
+            f"{st['fevals']:>7} {st['cpu']:>11.3f} {st['MB']:>8.0f} "
+            f"{(r['wall'] + st['cpu']) / T_END:>22.4f}",
+            flush=True,
+        )
     return 0
 
 

@@ -176,6 +176,7 @@ def _solve_dae(
         equation_names,
         residual_for_columns=problem.residual_for_columns,
         side=side,
+        quadrature=problem.quadrature,
     )
     options = {
         "rtol": rtol,

@@ -171,6 +171,7 @@ class Driver:
                 m.equation_names,
                 residual_for_columns=self.problem.residual_for_columns,
                 side=m.side,
+                quadrature=m.quadrature,  # the same pattern (``refine`` splices columns)
             )
             self._refiner = AlgebraicRefiner(
                 self.F,

@@ -53,7 +53,7 @@ KEEP_DIAGONAL = True
 _GETRF, _GETRS = scipy.linalg.get_lapack_funcs(("getrf", "getrs"), (np.zeros(1),))
 
 
-def colour_columns(pattern: scipy.sparse.csc_matrix) -> list[np.ndarray]:
+def colour_columns(pattern: scipy.sparse.csc_matrix, order_by=None) -> list[np.ndarray]:
     """Group the columns of a sparsity pattern so no two in a group share a row.
 
     Greedy colouring of the column intersection graph, the columns taken in
@@ -63,11 +63,14 @@ def colour_columns(pattern: scipy.sparse.csc_matrix) -> list[np.ndarray]:
     order needed up to 2 more groups (attemperator.toml 13 -> 11 = bound, the
     1000-volume steam pipe 17 -> 13, bound 11). Which columns share a group does not
     change a column of the matrix: row i sees one perturbed column of its own.
+    ``order_by``: the pattern whose column degrees set the order (default: ``pattern``).
     """
     n_rows, n_cols = pattern.shape
     indptr, indices = pattern.indptr, pattern.indices
+    if order_by is None:
+        order_by = pattern
     structure = scipy.sparse.csc_matrix(
-        (np.ones(indices.size), indices, indptr), shape=pattern.shape
+        (np.ones(order_by.indices.size), order_by.indices, order_by.indptr), shape=order_by.shape
     )
     degree = np.diff((structure.T @ structure).tocsr().indptr)
     order = np.argsort(-degree, kind="stable")
@@ -91,6 +94,73 @@ def colour_columns(pattern: scipy.sparse.csc_matrix) -> list[np.ndarray]:
         group_of[j] = g
         n_groups = max(n_groups, g + 1)
     return [np.flatnonzero(group_of == g) for g in range(n_groups)]
+
+
+def trailing_rows(pattern, sparsity, quadrature):
+    """The equations of quadratures that the Jacobian may keep to their quadrature's
+    entry (``IterationMatrix``, class doc), or None when there are none.
+
+    ``pattern``: the CSC pattern the matrix is stored on (the diagonal added);
+    ``sparsity``: the entries that can be non-zero; ``quadrature``: mask or indices of
+    the quadratures. A row r qualifies when it is the only row of some quadrature's
+    column c in ``sparsity`` (and of no second one), and it has more entries than
+    every row that does not qualify (it would raise the colouring's lower bound).
+    Returns (reduced, constraint, {r: c}): ``pattern`` without row r's entries but
+    (r, c) and the diagonal (r, r) (set to zero), and the colouring's pattern,
+    ``reduced`` with a row {c, j} for every other column j of row r (c's group must
+    hold no column that F_r reads, or its entry would be polluted; the others may
+    share groups)."""
+    q = np.asarray(quadrature)
+    q = np.flatnonzero(q) if q.dtype == bool else q.astype(np.intp)
+    if q.size == 0:
+        return None
+    structural = scipy.sparse.csc_matrix(sparsity, dtype=float, copy=True)
+    structural.data[:] = 1.0
+    structural.eliminate_zeros()
+    count = np.diff(structural.indptr)
+    q = q[count[q] == 1]
+    if q.size == 0:
+        return None
+    rows = structural.indices[structural.indptr[q]]
+    unique, times = np.unique(rows, return_counts=True)
+    single = np.isin(rows, unique[times == 1])
+    rows, q = rows[single], q[single]
+    csr = structural.tocsr()
+    row_nnz = np.diff(csr.indptr)
+    others = np.ones(row_nnz.size, dtype=bool)
+    others[rows] = False
+    largest_other = int(np.max(row_nnz[others], initial=0))
+    keep = row_nnz[rows] > largest_other
+    rows, q = rows[keep], q[keep]
+    if rows.size == 0:
+        return None
+    col_of_row = np.full(row_nnz.size, -1, dtype=np.intp)
+    col_of_row[rows] = q
+    coo = pattern.tocoo()
+    # (r, r), the added diagonal's, stays (zero: ``IterationMatrix.finite_difference``):
+    # without it the matching of the band ordering took 2.9 s instead of 0.2 ms
+    kept = (col_of_row[coo.row] < 0) | (coo.col == col_of_row[coo.row]) | (coo.row == coo.col)
+    n = pattern.shape[0]
+    reduced = scipy.sparse.csc_matrix(
+        (np.ones(int(kept.sum())), (coo.row[kept], coo.col[kept])), shape=pattern.shape
+    )
+    reduced.sort_indices()
+    # the rows {c, j}: c's group shares no column with row r
+    extra_rows, extra_cols = [], []
+    k = 0
+    for r, c in zip(rows.tolist(), q.tolist(), strict=True):
+        others_r = csr.indices[csr.indptr[r] : csr.indptr[r + 1]]
+        others_r = others_r[others_r != c]
+        ids = np.arange(k, k + others_r.size)
+        extra_rows += [ids, ids]
+        extra_cols += [np.full(others_r.size, c), others_r]
+        k += others_r.size
+    extra = scipy.sparse.csc_matrix(
+        (np.ones(2 * k), (np.concatenate(extra_rows), np.concatenate(extra_cols))), shape=(k, n)
+    )
+    constraint = scipy.sparse.vstack([reduced, extra], format="csc")
+    constraint.sort_indices()
+    return reduced, constraint, dict(zip(rows.tolist(), q.tolist(), strict=True))
 
 
 class SingularMatrixError(DAEError):
@@ -119,6 +189,16 @@ class IterationMatrix:
 
     ``side`` (optional): side(t, y, yp) -> array whose signs mark the smooth piece of
     the residual (the restart switches, module doc); None: no kinks known.
+
+    ``quadrature`` (optional, with a pattern only): mask of the unknowns whose Newton
+    update may trail by one iteration (the quadratures, out of every convergence
+    norm). The equation of a quadrature q (its column read by that equation alone)
+    that reads more columns than any other equation keeps only its entry in column
+    q (``trailing_rows``): the heat to a fixed wall, dQ_passed/dt = sum_i Q_i over a
+    pipe's 1000 volumes, needed 1002 column groups (each a residual evaluation) and
+    broke the band, for 13 without it. Column q is read by no other equation, so the
+    matrix is block triangular and the other unknowns' update is unchanged (to the
+    bit: their entries are the same); only q's update lags, by the others' last one.
     """
 
     def __init__(
@@ -132,6 +212,7 @@ class IterationMatrix:
         *,
         residual_for_columns: Callable | None = None,
         side: Callable | None = None,
+        quadrature=None,
     ):
         self.residual = residual
         self.n = n
@@ -140,6 +221,7 @@ class IterationMatrix:
         self.equation_names = equation_names
         self.sparse = sparsity is not None
         self.band = None
+        self.trailing = None  # {row: its quadrature's column} (``trailing_rows``)
         if sparsity is not None:
             pattern = scipy.sparse.csc_matrix(sparsity, dtype=float, copy=True)
             if pattern.shape != (n, n):
@@ -153,6 +235,40 @@ class IterationMatrix:
             pattern.eliminate_zeros()
             pattern.sum_duplicates()
             pattern.sort_indices()
+            groups = None
+            if quadrature is not None and jac is None:
+                found = trailing_rows(pattern, sparsity, quadrature)
+                if found is not None:
+                    reduced, constraint, trailing = found
+                    groups = colour_columns(constraint, order_by=reduced)
+                    # the largest row is a lower bound of the whole pattern's groups
+                    if len(groups) < int(np.max(np.diff(pattern.tocsr().indptr))):
+                        pattern, self.trailing = reduced, trailing
+                        # the trailing rows' entries but their quadrature's: zero
+                        cols = np.repeat(np.arange(n), np.diff(pattern.indptr))
+                        col_of = np.full(n, -1, dtype=np.intp)
+                        col_of[list(trailing)] = list(trailing.values())
+                        c = col_of[pattern.indices]
+                        self._trailing_zero = np.flatnonzero((c >= 0) & (cols != c))
+                        self._trailing_rows = np.array(list(trailing), dtype=np.intp)
+                        self._trailing_cols = np.array(list(trailing.values()), dtype=np.intp)
+                        self._trailing_pos = np.array(
+                            [
+                                np.flatnonzero((pattern.indices == r) & (cols == q))[0]
+                                for r, q in trailing.items()
+                            ],
+                            dtype=np.intp,
+                        )
+                        # the rows' values alone (``trailing_residual``): the components
+                        # that read the rows' columns
+                        read = scipy.sparse.csr_matrix(sparsity)[self._trailing_rows]
+                        self._trailing_partial = (
+                            None
+                            if residual_for_columns is None
+                            else residual_for_columns(np.unique(read.indices))
+                        )
+                    else:
+                        groups = None
             self.pattern = pattern
             self.band = BandOrdering.of(pattern)
             if self.band is None or not self.band.worthwhile:
@@ -164,10 +280,12 @@ class IterationMatrix:
                 structural = scipy.sparse.csc_matrix(sparsity, dtype=float, copy=True)
                 structural.data[:] = 1.0
                 structural.eliminate_zeros()
+                if self.trailing is not None:
+                    structural = structural.multiply(pattern).tocsc()
                 self.band = BandOrdering.of(pattern, structural) or self.band
             if self.band is not None and not self.band.worthwhile:
                 self.band = None
-            self.groups = colour_columns(pattern)
+            self.groups = groups if groups is not None else colour_columns(pattern)
             # For each group: the positions in pattern.data, their rows and columns.
             cols_of_entry = np.repeat(np.arange(n), np.diff(pattern.indptr))
             self._group_entries = []
@@ -188,6 +306,7 @@ class IterationMatrix:
         self.cj = None
         self._lu = None
         self.side = side  # the signs of the restart switches (class doc), or None
+        self.quadrature = quadrature  # as given (class doc): for a matrix on the same pattern
         self.flipped_groups = 0  # groups differenced backwards to stay on one side
 
     # -- building ---------------------------------------------------------------------------
@@ -244,6 +363,8 @@ class IterationMatrix:
             for k, (cols, pos, rows, entry_cols) in enumerate(self._group_entries):
                 f_pert, sign = perturbed(cols, self._group_residuals[k])
                 data[pos] = (f_pert - f0)[rows] / (sign * inc[entry_cols])
+            if self.trailing is not None:
+                data[self._trailing_zero] = 0.0  # left out (class doc)
             p = self.pattern
             return scipy.sparse.csc_matrix((data, p.indices, p.indptr), shape=p.shape)
         n = self.n
@@ -259,6 +380,22 @@ class IterationMatrix:
             f_pert, sign = perturbed(np.array([j]))
             matrix[:, j] = (f_pert - f0) / (sign * inc[j])
         return matrix
+
+    def trailing_entries(self):
+        """(rows, quadrature columns, their entries J_qq in the current matrix) of the
+        rows left out (class doc), or None."""
+        if self.trailing is None or self.matrix is None:
+            return None
+        return self._trailing_rows, self._trailing_cols, self.matrix.data[self._trailing_pos]
+
+    def trailing_residual(self, t, y, yp) -> np.ndarray:
+        """The rows left out (class doc) at (t, y, yp), counted as one evaluation: by the
+        partial channel, only the components that read them, when there is one."""
+        if self._trailing_partial is not None:
+            f = self._partial(self._trailing_partial, t, y, yp, np.zeros(self.n))
+        else:
+            f = self.residual(t, y, yp)
+        return f[self._trailing_rows]
 
     def _partial(self, partial, t, y, yp, f0):
         """``partial(t, y, yp, f0)`` counted and with errors reported as a whole

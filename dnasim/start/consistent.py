@@ -42,6 +42,11 @@ def iteration_matrix(dae) -> IterationMatrix:
     Newton iteration, so a caller with several solves makes it once), with ``dae``'s
     partial-residual channel ``residual_for_columns`` where it has one (a System)."""
     pattern = sp.csc_matrix(dae.pattern_y + dae.pattern_yp)
+    # the quadratures (y' in one equation, y in none: the accumulators) may trail
+    # (``IterationMatrix``): a fixed wall's heat summed over 10000 volumes took 10013
+    # residual evaluations and 1.2 GB for the steady start, 45 with it
+    in_y = np.diff(sp.csc_matrix(dae.pattern_y).indptr) > 0
+    quadrature = (np.diff(sp.csc_matrix(dae.pattern_yp).indptr) == 1) & ~in_y
     return IterationMatrix(
         dae.residual,
         len(dae.names),
@@ -49,6 +54,7 @@ def iteration_matrix(dae) -> IterationMatrix:
         names=dae.names,
         equation_names=dae.eq_names,
         residual_for_columns=getattr(dae, "residual_for_columns", None),
+        quadrature=quadrature,
     )
 
 
