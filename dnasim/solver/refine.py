@@ -54,6 +54,18 @@ The RMS over the algebraic y; their max norm (``ALGEBRAIC_MAX``) kept every plan
 within 0.06 tolerance units of the reference (rankine 0.75 -> 0.04), at a cost of
 drum_boiler 1631 -> 1904 and rankine 4124 -> 4235 residual evaluations.
 
+The solve is not always the better answer. Where an algebraic variable is much more
+sensitive to the states than it varies along the solution, the solved value carries
+the states' interpolation error amplified: tests/plants/pump_shutoff.toml, a shut pump
+against its closed valve over a 20.7 s step, read -4.7e-3 kg/s solved where the flow
+is +1.4e-5 kg/s (the line's mass interpolated 4e-4 of its tolerance off, the pump's
+head curve flat at zero flow), while the flow's own polynomial was right. So each value
+is then kept solved or interpolated, whichever has the smaller estimated error
+(``driver.Driver._choose``): the polynomial's error at the point is
+``nordsieck.interpolation_error`` times the step's Delta for every variable, the
+solved value's is the states' share of it propagated through the solve
+(``propagate``).
+
 Measured to end up less useful (benchmarks/refine_cost.py, 1200 s of each plant):
 CONVERGED = 0.1 or 0.3 of the tolerance (with the algebraic test, before the warm
 start: drum_boiler 2131 -> 1882 and 1614 residual evaluations, but its algebraic
@@ -152,6 +164,24 @@ class AlgebraicRefiner:
             last = self.carry[1][-1:] if self.carry is not None and self.carry[0] == step else []
             self.carry = (step, [*last, c])
         return result
+
+    def propagate(self, t, y, yp, dx):
+        """The change (dy, dy') of the solved unknowns (the algebraic y, the differential
+        y') when the differential y move by ``dx`` (zero in the algebraic entries): one
+        Newton step of the moved problem with the kept matrix, -M^-1 (F(y + dx) - F(y)),
+        two residual evaluations and one back-substitution. None without a kept matrix
+        or where F cannot be evaluated."""
+        if not self.kept:
+            return None
+        try:
+            f0 = self.F(t, y, yp)
+            f1 = self.F(t, y + dx, yp)
+        except ResidualDomainError:
+            return None
+        if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(f1))):
+            return None
+        d = self.matrix.solve(f0 - f1)
+        return d * self.ymask, d * self.ypmask
 
     def _guess(self, t, step):
         """The correction (dy, dy') expected at t from those solved at the last points of
