@@ -212,7 +212,8 @@ class Driver:
         - solved: the differential y's share of that error carried through the solve,
           (dy_a, dy'_d) = -M^-1 (F(y + dx) - F(y)) with dx = a_max Delta_d, the largest
           in the step (``AlgebraicRefiner.propagate``: once a step, at its first solved
-          point), times |a| / a_max at the point.
+          point; a fresh matrix there where the point needed ``solve_consistent``),
+          times |a| / a_max at the point.
 
         Both with CHOOSE_FLOOR of the tolerance added (the solve's and the corrector's
         own convergence; ties keep the solved value). A linear algebraic relation gives
@@ -221,7 +222,8 @@ class Driver:
         ramp inside the step (the solved one kept), a flow at the flat top of a pump
         curve at shut-off, LAM times more sensitive to the states than it changes along
         the solution (the interpolated one kept; tests/test_output_between_steps.py).
-        Without Delta or a kept matrix the solved values are returned.
+        Without Delta or an estimate (F not finite at y + dx, a singular matrix) the
+        solved values are returned.
         """
         solver = self.solver
         delta = solver.step_delta
@@ -234,7 +236,7 @@ class Driver:
         step = self.stats.steps
         if self._estimate is None or self._estimate[0] != step:
             dx = np.where(self.algebraic, 0.0, delta) * amax
-            du = self._refiner.propagate(t, y_new, yp_new, dx)
+            du = self._refiner.propagate(t, y_new, yp_new, dx, h)
             self._estimate = (step, du)
         du = self._estimate[1]
         if du is None:

@@ -165,20 +165,22 @@ class AlgebraicRefiner:
             self.carry = (step, [*last, c])
         return result
 
-    def propagate(self, t, y, yp, dx):
+    def propagate(self, t, y, yp, dx, h):
         """The change (dy, dy') of the solved unknowns (the algebraic y, the differential
         y') when the differential y move by ``dx`` (zero in the algebraic entries): one
         Newton step of the moved problem with the kept matrix, -M^-1 (F(y + dx) - F(y)),
-        two residual evaluations and one back-substitution. None without a kept matrix
-        or where F cannot be evaluated."""
-        if not self.kept:
-            return None
+        two residual evaluations and one back-substitution; without a kept matrix (the
+        point was solved by ``solve_consistent``) a fresh one at (y, yp) first, ``h``
+        weighting its y' columns. None where F cannot be evaluated or the matrix is
+        singular."""
         try:
             f0 = self.F(t, y, yp)
             f1 = self.F(t, y + dx, yp)
         except ResidualDomainError:
             return None
         if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(f1))):
+            return None
+        if not self.kept and not self._fresh_matrix(t, y, yp, f0, self._weights(y, h)):
             return None
         d = self.matrix.solve(f0 - f1)
         return d * self.ymask, d * self.ypmask
@@ -272,6 +274,28 @@ class AlgebraicRefiner:
         self.stats_spliced += 1
         return True
 
+    def _fresh_matrix(self, t, y, yp, f, uw) -> bool:
+        """dF/du at (y, yp) (f = F there, uw the weights), factorised and kept: True."""
+        u = np.where(self.unknown_y, y, yp)
+        inc = np.maximum(SQRT_EPS * np.abs(u), 1.0 / uw)
+        inc = (u + inc) - u  # exactly representable
+        tiny = inc == 0.0
+        if np.any(tiny):
+            inc[tiny] = np.spacing(np.abs(u[tiny])) * 2.0**20
+        self.kept = False
+        self.matrix.matrix = self.matrix.finite_difference(
+            t, y, yp, f, inc, self.ymask, self.ypmask
+        )
+        try:
+            self.matrix.factorize()
+        except SingularMatrixError:
+            return False
+        self.kept = True
+        if self.source is not None:
+            self.spliced_from = self.source.matrix  # not newer than this one
+        self.block = ALGEBRAIC_TEST and self._block_triangular()
+        return True
+
     def _weights(self, y, h):
         return 1.0 / (self.rtol * np.abs(y) + self.atol) * (self.ymask + h * self.ypmask)
 
@@ -282,25 +306,8 @@ class AlgebraicRefiner:
         if not np.all(np.isfinite(f)):
             return None
         uw = self._weights(y, h)
-        if fresh:
-            u = np.where(self.unknown_y, y, yp)
-            inc = np.maximum(SQRT_EPS * np.abs(u), 1.0 / uw)
-            inc = (u + inc) - u  # exactly representable
-            tiny = inc == 0.0
-            if np.any(tiny):
-                inc[tiny] = np.spacing(np.abs(u[tiny])) * 2.0**20
-            self.kept = False
-            self.matrix.matrix = self.matrix.finite_difference(
-                t, y, yp, f, inc, self.ymask, self.ypmask
-            )
-            try:
-                self.matrix.factorize()
-            except SingularMatrixError:
-                return None
-            self.kept = True
-            if self.source is not None:
-                self.spliced_from = self.source.matrix  # not newer than this one
-            self.block = ALGEBRAIC_TEST and self._block_triangular()
+        if fresh and not self._fresh_matrix(t, y, yp, f, uw):
+            return None
         previous = np.inf
         for k in range(MAX_ITERS):
             d = self.matrix.solve(-f)
