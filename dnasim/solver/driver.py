@@ -24,7 +24,8 @@ Around each step the driver
 - emits the output points (every step, or the output times). A point between two
   steps takes its differential variables from the step's Nordsieck polynomial and,
   when the step corrected an algebraic variable by more than its tolerance, its
-  algebraic variables (and y') solved from them (``Driver.refine``).
+  algebraic variables (and y') solved from them (``Driver.refine``), each value then
+  kept solved or interpolated by their estimated errors (``Driver._choose``).
 """
 
 from __future__ import annotations
