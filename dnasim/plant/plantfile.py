@@ -94,8 +94,9 @@ SIMULATION_KEYS = {
     "start": '"steady" (steady state at t_start) or "given" (initial states from parameters)',
     "max_step": "largest step size [s] (default: unlimited)",
     "max_steps": "most accepted steps before the run stops (default 500000)",
-    "refine_output": "true: at output points between steps, solve the algebraic variables "
-    "from the interpolated states instead of interpolating them (default false)",
+    "refine_output": "false: at output points between steps, interpolate the algebraic "
+    "variables instead of solving them from the interpolated states where that is "
+    "estimated to be more accurate (default true)",
 }
 
 _TOP_LEVEL = ("plant", "simulation", "components", "nodes")

@@ -89,7 +89,7 @@ class SimulationSettings:
     max_step: float | None = None
     max_steps: int | None = None
     #: solve the algebraic variables at output points between steps (docs/plant_files.md)
-    refine_output: bool = False
+    refine_output: bool = True
 
     def output_points(self) -> float | None:
         """How many rows ``t_eval`` or ``output_interval`` asks for (None: every

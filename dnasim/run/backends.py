@@ -82,12 +82,12 @@ class NordsieckBDF:
     exclude_algebraic_from_error: bool = True
     dense_output: bool = True
     #: solve the algebraic variables at output points between steps (``solve_dae``'s
-    #: ``refine_output``). Off by default: in a liquid line at rest with long steps the
-    #: re-solve amplifies the interpolated states' error through the water's stiffness
-    #: (tests/plants/pump_shutoff.toml: -4.7e-3 kg/s through a shut pump whose flow is
-    #: 1.4e-5 kg/s), while it corrects gas valves and drums (ClaRa's TestValves, the
-    #: MSL drum boiler's NaN rows); a criterion that tells the two apart is not found yet
-    refine_output: bool = False
+    #: ``refine_output``), each value then kept solved or interpolated by their
+    #: estimated errors (``driver.Driver._choose``: the re-solve alone amplified the
+    #: interpolated states' error through the water's stiffness in a liquid line at
+    #: rest, tests/plants/pump_shutoff.toml: -4.7e-3 kg/s through a shut pump whose flow
+    #: is 1.4e-5 kg/s)
+    refine_output: bool = True
     #: False: the rows go to the callback only (a solve_dae with ``keep_output``)
     keep_output: bool = True
     name: str = field(default="NordsieckBDF", init=False)

@@ -64,8 +64,8 @@ def solver_options(settings) -> dict:
         kw["max_step"] = settings.max_step
     if settings.max_steps is not None:
         kw["max_steps"] = int(settings.max_steps)
-    if getattr(settings, "refine_output", False):
-        kw["refine_output"] = True
+    if not getattr(settings, "refine_output", True):
+        kw["refine_output"] = False
     return kw
 
 

@@ -190,6 +190,9 @@ class NordsieckBDF(NewtonCorrector):
         # driver's output reads it, ``track_algebraic_correction``); inf: not tracked
         self.algebraic_correction = math.inf
         self._track = None
+        # Delta = y_n - y_pred of the last step where tracked (the driver's output
+        # estimates the interpolation errors between steps from it, ``driver.Driver.refine``)
+        self.step_delta = None
         if track_algebraic_correction and self.algebraic is not None and self.algebraic.any():
             self._track = np.flatnonzero(self.algebraic)
         self.restart(t0, y0, yp0, h0)
@@ -386,6 +389,8 @@ class NordsieckBDF(NewtonCorrector):
             if self._track is not None:
                 a = self._track
                 self.algebraic_correction = float(np.max(np.abs(delta[a]) * weights[a]))
+                # a copy: ``_change_step`` scales delta_prev in place
+                self.step_delta = delta.copy()
             self._accept(t_new, z_pred, delta, y, yp)
             self.h_used, self.q_used = h, q
             self._choose_next(error, delta, error_weights, failed_this_step)

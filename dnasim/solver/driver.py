@@ -24,7 +24,8 @@ Around each step the driver
 - emits the output points (every step, or the output times). A point between two
   steps takes its differential variables from the step's Nordsieck polynomial and,
   when the step corrected an algebraic variable by more than its tolerance, its
-  algebraic variables (and y') solved from them (``Driver.refine``).
+  algebraic variables (and y') solved from them (``Driver.refine``), each value then
+  kept solved or interpolated by their estimated errors (``Driver._choose``).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ import functools
 import numpy as np
 
 from dnasim.core.errors import DAEError, ResidualDomainError
+from dnasim.solver import nordsieck as nd
 from dnasim.solver.bdf import NordsieckBDF
 from dnasim.solver.crossings import (
     Crossing,
@@ -57,6 +59,11 @@ MAX_RESTARTS_AT_ONE_TIME = 50
 #: by more than this many tolerance units in the step (benchmarks/refine_cost.py sets it
 #: to -inf for its reference)
 REFINE_SKIP_BELOW = 1.0
+#: keep each value between steps solved or interpolated by their estimated errors
+#: (``Driver._choose``); False: the solved ones (benchmarks/refine_cost.py's ``solve``)
+CHOOSE = True
+#: ... both estimates with this many tolerance units added (the solve's convergence)
+CHOOSE_FLOOR = 0.1
 
 
 class Driver:
@@ -85,6 +92,10 @@ class Driver:
             refine=self.refine if options.get("refine_output", True) else None,
         )
         self._refiner = None  # ``refine``'s AlgebraicRefiner, made at first use
+        self._estimate = None  # (step, propagated Delta) of ``_choose``
+        # ``_choose``'s counts: [algebraic y kept interpolated, differential y' kept
+        # interpolated, points chosen at]
+        self.stats_chosen = [0, 0, 0]
         self.events = EventLog(switches)
         self.stops = Stops(problem.tstops, self.t0, self.t_end)
         self.status, self.message = 0, "The solver reached the end of the interval."
@@ -190,7 +201,63 @@ class Driver:
             self.stats.output_solve_failures += 1
             return y, yp
         self.stats.output_solves += 1
+        if CHOOSE:
+            return self._choose(t, y, yp, y_new, yp_new)
         return y_new, yp_new
+
+    def _choose(self, t, y, yp, y_new, yp_new):
+        """Per value, the solved one (y_new, yp_new) or the interpolated one (y, yp),
+        whichever has the smaller estimated error at t = t_n + s h of the step:
+
+        - interpolated: the polynomial's error, a Delta in y and b Delta / h in y'
+          (``nordsieck.interpolation_error(q, s)``, Delta = y_n - y_pred of the step);
+        - solved: the differential y's share of that error carried through the solve,
+          (dy_a, dy'_d) = -M^-1 (F(y + dx) - F(y)) with dx = a_max Delta_d, the largest
+          in the step (``AlgebraicRefiner.propagate``: once a step, at its first solved
+          point; a fresh matrix there where the point needed ``solve_consistent``),
+          times |a| / a_max at the point.
+
+        Both with CHOOSE_FLOOR of the tolerance added (the solve's and the corrector's
+        own convergence; ties keep the solved value). A linear algebraic relation gives
+        the two the same value and the same estimate; they part where the variable is a
+        nonlinear function of the states or of t: a valve's square-root law through a
+        ramp inside the step (the solved one kept), a flow at the flat top of a pump
+        curve at shut-off, LAM times more sensitive to the states than it changes along
+        the solution (the interpolated one kept; tests/test_output_between_steps.py).
+        Without Delta or an estimate (F not finite at y + dx, a singular matrix) the
+        solved values are returned.
+        """
+        solver = self.solver
+        delta = solver.step_delta
+        if delta is None:
+            return y_new, yp_new
+        q, h = solver.q_used, solver.h_used
+        s = (t - solver.t) / h
+        a, b = nd.interpolation_error(q, s)
+        amax = nd.largest_interpolation_error(q)
+        step = self.stats.steps
+        if self._estimate is None or self._estimate[0] != step:
+            dx = np.where(self.algebraic, 0.0, delta) * amax
+            du = self._refiner.propagate(t, y_new, yp_new, dx, h)
+            self._estimate = (step, du)
+        du = self._estimate[1]
+        if du is None:
+            return y_new, yp_new
+        alg = self.algebraic
+        r = abs(a) / amax
+        tol = self.opt["rtol"] * np.abs(y_new) + self.problem.atol
+        e_int_y = abs(a) * np.abs(delta) + CHOOSE_FLOOR * tol
+        e_res_y = r * np.abs(du[0]) + CHOOSE_FLOOR * tol
+        use_y = alg & (e_int_y < e_res_y)
+        e_int_p = abs(b) / h * np.abs(delta) + CHOOSE_FLOOR * tol / h
+        e_res_p = r * np.abs(du[1]) + CHOOSE_FLOOR * tol / h
+        use_p = ~alg & (e_int_p < e_res_p)
+        self.stats_chosen[0] += int(np.count_nonzero(use_y))
+        self.stats_chosen[1] += int(np.count_nonzero(use_p))
+        self.stats_chosen[2] += 1
+        if not (use_y.any() or use_p.any()):
+            return y_new, yp_new
+        return np.where(use_y, y, y_new), np.where(use_p, yp, yp_new)
 
     # -- set-up ------------------------------------------------------------------------
     def _start(self):

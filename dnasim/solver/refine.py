@@ -54,6 +54,18 @@ The RMS over the algebraic y; their max norm (``ALGEBRAIC_MAX``) kept every plan
 within 0.06 tolerance units of the reference (rankine 0.75 -> 0.04), at a cost of
 drum_boiler 1631 -> 1904 and rankine 4124 -> 4235 residual evaluations.
 
+The solve is not always the better answer. Where an algebraic variable is much more
+sensitive to the states than it varies along the solution, the solved value carries
+the states' interpolation error amplified: tests/plants/pump_shutoff.toml, a shut pump
+against its closed valve over a 20.7 s step, read -4.7e-3 kg/s solved where the flow
+is +1.4e-5 kg/s (the line's mass interpolated 4e-4 of its tolerance off, the pump's
+head curve flat at zero flow), while the flow's own polynomial was right. So each value
+is then kept solved or interpolated, whichever has the smaller estimated error
+(``driver.Driver._choose``): the polynomial's error at the point is
+``nordsieck.interpolation_error`` times the step's Delta for every variable, the
+solved value's is the states' share of it propagated through the solve
+(``propagate``).
+
 Measured to end up less useful (benchmarks/refine_cost.py, 1200 s of each plant):
 CONVERGED = 0.1 or 0.3 of the tolerance (with the algebraic test, before the warm
 start: drum_boiler 2131 -> 1882 and 1614 residual evaluations, but its algebraic
@@ -153,6 +165,26 @@ class AlgebraicRefiner:
             self.carry = (step, [*last, c])
         return result
 
+    def propagate(self, t, y, yp, dx, h):
+        """The change (dy, dy') of the solved unknowns (the algebraic y, the differential
+        y') when the differential y move by ``dx`` (zero in the algebraic entries): one
+        Newton step of the moved problem with the kept matrix, -M^-1 (F(y + dx) - F(y)),
+        two residual evaluations and one back-substitution; without a kept matrix (the
+        point was solved by ``solve_consistent``) a fresh one at (y, yp) first, ``h``
+        weighting its y' columns. None where F cannot be evaluated or the matrix is
+        singular."""
+        try:
+            f0 = self.F(t, y, yp)
+            f1 = self.F(t, y + dx, yp)
+        except ResidualDomainError:
+            return None
+        if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(f1))):
+            return None
+        if not self.kept and not self._fresh_matrix(t, y, yp, f0, self._weights(y, h)):
+            return None
+        d = self.matrix.solve(f0 - f1)
+        return d * self.ymask, d * self.ypmask
+
     def _guess(self, t, step):
         """The correction (dy, dy') expected at t from those solved at the last points of
         the same step: the last one, or the line through the last two."""
@@ -242,6 +274,28 @@ class AlgebraicRefiner:
         self.stats_spliced += 1
         return True
 
+    def _fresh_matrix(self, t, y, yp, f, uw) -> bool:
+        """dF/du at (y, yp) (f = F there, uw the weights), factorised and kept: True."""
+        u = np.where(self.unknown_y, y, yp)
+        inc = np.maximum(SQRT_EPS * np.abs(u), 1.0 / uw)
+        inc = (u + inc) - u  # exactly representable
+        tiny = inc == 0.0
+        if np.any(tiny):
+            inc[tiny] = np.spacing(np.abs(u[tiny])) * 2.0**20
+        self.kept = False
+        self.matrix.matrix = self.matrix.finite_difference(
+            t, y, yp, f, inc, self.ymask, self.ypmask
+        )
+        try:
+            self.matrix.factorize()
+        except SingularMatrixError:
+            return False
+        self.kept = True
+        if self.source is not None:
+            self.spliced_from = self.source.matrix  # not newer than this one
+        self.block = ALGEBRAIC_TEST and self._block_triangular()
+        return True
+
     def _weights(self, y, h):
         return 1.0 / (self.rtol * np.abs(y) + self.atol) * (self.ymask + h * self.ypmask)
 
@@ -252,25 +306,8 @@ class AlgebraicRefiner:
         if not np.all(np.isfinite(f)):
             return None
         uw = self._weights(y, h)
-        if fresh:
-            u = np.where(self.unknown_y, y, yp)
-            inc = np.maximum(SQRT_EPS * np.abs(u), 1.0 / uw)
-            inc = (u + inc) - u  # exactly representable
-            tiny = inc == 0.0
-            if np.any(tiny):
-                inc[tiny] = np.spacing(np.abs(u[tiny])) * 2.0**20
-            self.kept = False
-            self.matrix.matrix = self.matrix.finite_difference(
-                t, y, yp, f, inc, self.ymask, self.ypmask
-            )
-            try:
-                self.matrix.factorize()
-            except SingularMatrixError:
-                return None
-            self.kept = True
-            if self.source is not None:
-                self.spliced_from = self.source.matrix  # not newer than this one
-            self.block = ALGEBRAIC_TEST and self._block_triangular()
+        if fresh and not self._fresh_matrix(t, y, yp, f, uw):
+            return None
         previous = np.inf
         for k in range(MAX_ITERS):
             d = self.matrix.solve(-f)
