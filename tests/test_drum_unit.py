@@ -10,7 +10,7 @@ deaerator, the pumps' suction and discharge), and the heat inputs of the plant f
 from these alone it computes, stage by stage with IF97 enthalpies, the steam and
 feed flows (boiler and superheater energy balances), the expansion lines (the
 turbine groups' efficiencies), the extraction flows (the HP heater's, the
-deaerator's and the LP heater's energy and mass balances), the shaft powers, the
+deaerator's and the two LP heaters' energy and mass balances), the shaft powers, the
 net power and the cycle efficiency; these are compared with the simulation's.
 ``design_balance`` is the design heat balance the plant was sized from (the
 plant file's header), compared more loosely: the heaters and the deaerator settle
