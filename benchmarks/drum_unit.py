@@ -62,7 +62,8 @@ def main():
     print(f"{'quantity':<10} {'unit':>5} {'simulated':>12} {'hand':>12} {'rel. diff':>10} "
           f"{'design':>10}")  # fmt: skip
     for key in ("m_steam", "m_feed", "m_spray", "m_rh_spray", "m_hph", "m_da", "m_cond",
-                "m_lph", "P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta", "T_rho"):  # fmt: skip
+                "m_lph", "m_lph2", "P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta",
+                "T_rho"):  # fmt: skip
         unit, f = units[key[0]]
         s, h = sim[key], hand[key]
         d = design.get(key)

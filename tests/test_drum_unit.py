@@ -10,7 +10,7 @@ deaerator, the pumps' suction and discharge), and the heat inputs of the plant f
 from these alone it computes, stage by stage with IF97 enthalpies, the steam and
 feed flows (boiler and superheater energy balances), the expansion lines (the
 turbine groups' efficiencies), the extraction flows (the HP heater's, the
-deaerator's and the LP heater's energy and mass balances), the shaft powers, the
+deaerator's and the two LP heaters' energy and mass balances), the shaft powers, the
 net power and the cycle efficiency; these are compared with the simulation's.
 ``design_balance`` is the design heat balance the plant was sized from (the
 plant file's header), compared more loosely: the heaters and the deaerator settle
@@ -44,7 +44,7 @@ Q = {
     "sh2": 36.0e6,
     "reheater": 35.8e6,
 }
-ETA = {"hp": 0.87, "ip": 0.90, "lp1": 0.88, "lp2": 0.85}  # the turbine groups'
+ETA = {"hp": 0.87, "ip": 0.90, "lp1a": 0.88, "lp1b": 0.88, "lp2": 0.85}  # the turbine groups'
 ETA_PUMP = 0.8  # both pumps
 
 
@@ -95,22 +95,30 @@ def hand_balance(v):
     h["xo"] = expand(v["p_hrh"], h["hrh"], v["p_xo"], ETA["ip"])
     # deaerator: m_c h_c + m_hph h_hd + m_da h_xo = m_fp h'(p_da), m_c + m_hph + m_da = m_fp
     m_fp = m_feed + m_sp + m_rsp
-    h_c = h_pT(v["p_lph"], v["T_lph"])  # condensate after the LP heater (isenthalpic valve)
+    h_c = h_pT(v["p_lph2"], v["T_lph2"])  # condensate after LPH2 (isenthalpic valve)
     h_da = h_sat(v["p_da"], 0)
     m_da = (m_fp * h_da - m_hph * h_hd - (m_fp - m_hph) * h_c) / (h["xo"] - h_c)
     m_cond = m_fp - m_hph - m_da
-    # LP turbine groups, LP heater: m_cond (h_c - h_cp) = m_lph (h_lp - h_lph_drain)
-    m_lp1 = m_ip - m_da
-    h["lp"] = expand(v["p_xo"], h["xo"], v["p_lp"], ETA["lp1"])
+    # LP turbine groups and the two LP heaters, each draining to the condenser. LPH2
+    # (extraction between LP1a and LP1b): m_cond (h_c - h_c1) = m_lph2 (h_lpx - h_ld2);
+    # LPH1 (between LP1b and LP2): m_cond (h_c1 - h_cp) = m_lph (h_lp - h_ld)
+    m_lp1a = m_ip - m_da
+    h["lpx"] = expand(v["p_xo"], h["xo"], v["p_lpx"], ETA["lp1a"])
+    h_c1 = h_pT(v["p_lph"], v["T_lph"])  # condensate between LPH1 and LPH2
+    h_ld2 = h_pT(v["p_lph2_drain"], v["T_lph2_drain"])
+    m_lph2 = m_cond * (h_c - h_c1) / (h["lpx"] - h_ld2)
+    m_lp1b = m_lp1a - m_lph2
+    h["lp"] = expand(v["p_lpx"], h["lpx"], v["p_lp"], ETA["lp1b"])
     h_cp = h_pT(v["p_cp"], v["T_cp"])
     h_ld = h_pT(v["p_lph_drain"], v["T_lph_drain"])
-    m_lph = m_cond * (h_c - h_cp) / (h["lp"] - h_ld)
-    m_lp2 = m_lp1 - m_lph
+    m_lph = m_cond * (h_c1 - h_cp) / (h["lp"] - h_ld)
+    m_lp2 = m_lp1b - m_lph
     h["exh"] = expand(v["p_lp"], h["lp"], v["p_exh"], ETA["lp2"])
     P_t = {
         "hp": m_ms * (h_ms - h["crh"]),
         "ip": m_ip * (h["hrh"] - h["xo"]),
-        "lp1": m_lp1 * (h["xo"] - h["lp"]),
+        "lp1a": m_lp1a * (h["xo"] - h["lpx"]),
+        "lp1b": m_lp1b * (h["lpx"] - h["lp"]),
         "lp2": m_lp2 * (h["lp"] - h["exh"]),
     }
     # pumps: P = m dp/(rho_suction eta)
@@ -129,9 +137,10 @@ def hand_balance(v):
         m_da=m_da,
         m_cond=m_cond,
         m_lph=m_lph,
+        m_lph2=m_lph2,
         P_hp=P_t["hp"],
         P_ip=P_t["ip"],
-        P_lp=P_t["lp1"] + P_t["lp2"],
+        P_lp=P_t["lp1a"] + P_t["lp1b"] + P_t["lp2"],
         P_pumps=P_cp + P_fp,
         Q_in=Q_in,
         net=net,
@@ -143,8 +152,9 @@ def hand_balance(v):
 def design_balance():
     """The design heat balance the plant was sized from (the plant file's header):
     100 kg/s at 130 bar / 540 degC, cold reheat 36 bar, hot reheat 34 bar / 540 degC,
-    crossover 6 bar, LP extraction 1.2 bar, condenser 0.07 bar; heaters 5 K below the
-    saturation of their (1 bar lower) shells, drains saturated; deaerator 5.5 bar with
+    crossover 6 bar, LP extractions 2.5 bar (LPH2) and 1.2 bar (LPH1), condenser 0.07
+    bar; heaters 5 K below the saturation of their (1 bar lower; LP: 0.1 bar lower)
+    shells, drains saturated; deaerator 5.5 bar with
     1.8 bar of static head at the feed pump; feed pump 170 bar, condensate pump 10
     bar; spray 3 kg/s, blow-down 1 kg/s, drum 140 bar."""
     bar = 1e5
@@ -153,7 +163,8 @@ def design_balance():
     h_crh = expand(130 * bar, h_ms, 36 * bar, ETA["hp"])
     h_hrh = h_pT(34 * bar, 813.15)
     h_xo = expand(34 * bar, h_hrh, 6 * bar, ETA["ip"])
-    h_lp = expand(6 * bar, h_xo, 1.2 * bar, ETA["lp1"])
+    h_lpx = expand(6 * bar, h_xo, 2.5 * bar, ETA["lp1a"])
+    h_lp = expand(2.5 * bar, h_lpx, 1.2 * bar, ETA["lp1b"])
     h_exh = expand(1.2 * bar, h_lp, 0.07 * bar, ETA["lp2"])
     h_hw = h_sat(0.07 * bar, 0)
     rho_hw = PropsSI("D", "P", 0.07 * bar, "Q", 0, IF97)
@@ -166,17 +177,20 @@ def design_balance():
     m_feed = m_ms - m_sp + m_bd
     m_fp = m_feed + m_sp
     m_hph = m_feed * (h_fw - h_fp) / (h_crh - h_sat(35 * bar, 0))
-    h_c = h_pT(9.5 * bar, T_sat(1.1 * bar) - 5)
+    h_c1 = h_pT(9.5 * bar, T_sat(1.1 * bar) - 5)  # after LPH1
+    h_c = h_pT(9.2 * bar, T_sat(2.4 * bar) - 5)  # after LPH2
     m_da = (m_fp * h_da - m_hph * h_sat(35 * bar, 0) - (m_fp - m_hph) * h_c) / (h_xo - h_c)
     m_cond = m_fp - m_hph - m_da
-    m_lph = m_cond * (h_c - h_cp) / (h_lp - h_sat(1.1 * bar, 0))
+    m_lph2 = m_cond * (h_c - h_c1) / (h_lpx - h_sat(2.4 * bar, 0))
+    m_lph = m_cond * (h_c1 - h_cp) / (h_lp - h_sat(1.1 * bar, 0))
     m_rh = m_ms - m_hph
     m_lp1 = m_rh - m_da
     P_t = (
         m_ms * (h_ms - h_crh)
         + m_rh * (h_hrh - h_xo)
-        + m_lp1 * (h_xo - h_lp)
-        + (m_lp1 - m_lph) * (h_lp - h_exh)
+        + m_lp1 * (h_xo - h_lpx)
+        + (m_lp1 - m_lph2) * (h_lpx - h_lp)
+        + (m_lp1 - m_lph2 - m_lph) * (h_lp - h_exh)
     )
     P_p = m_cond * (h_cp - h_hw) + m_fp * (h_fp - h_da)
     p_d = 140 * bar
@@ -213,7 +227,8 @@ def operating_points(res, k=0):
         ("hph", "n_hph"), ("fp", "n_fp"), ("ms", "n_ms"), ("hp", "n_hp"), ("crh", "n_crh"),
         ("rho", "n_rho"), ("hrh", "n_hrh"), ("xo", "n_xo"), ("lp", "n_lp"), ("exh", "n_exh"),
         ("lph", "n_lph"), ("cp", "n_cp"), ("hw", "n_hw"), ("fps", "n_fps"),
-        ("hph_drain", "n_hph_drain"), ("lph_drain", "n_lph_drain"),
+        ("hph_drain", "n_hph_drain"), ("lph_drain", "n_lph_drain"), ("lpx", "n_lpx"),
+        ("lph2", "n_lph2"), ("lph2_drain", "n_lph2_drain"),
     ]:  # fmt: skip
         v[f"p_{key}"] = res[f"{node}.p"][k]
         v[f"T_{key}"] = res[f"{node}.T"][k]
@@ -226,7 +241,7 @@ def operating_points(res, k=0):
 def simulated(res, k=0):
     P = lambda name: res[f"{name}.P"][k]  # noqa: E731 - a turbine's P: delivered [W]
     pumps = res["condensate_pump.P"][k] + res["feed_pump.P"][k]
-    turbines = P("hp") + P("ip") + P("lp1") + P("lp2")
+    turbines = P("hp") + P("ip") + P("lp1a") + P("lp1b") + P("lp2")
     Q_in = sum(Q.values())  # the given heat fluxes: at rest each reaches its fluid
     return {
         "m_steam": res["turbine_valve.m"][k],
@@ -237,9 +252,10 @@ def simulated(res, k=0):
         "m_da": res["da_steam_valve.m"][k],
         "m_cond": res["condensate_valve.m"][k],
         "m_lph": res["lph_drain.m"][k],
+        "m_lph2": res["lph2_drain.m"][k],
         "P_hp": P("hp"),
         "P_ip": P("ip"),
-        "P_lp": P("lp1") + P("lp2"),
+        "P_lp": P("lp1a") + P("lp1b") + P("lp2"),
         "P_pumps": pumps,
         "net": turbines - pumps,
         "eta": (turbines - pumps) / Q_in,
@@ -253,10 +269,11 @@ def test_full_load_steady_state_against_the_hand_heat_balance(run):
     sim = simulated(res)
     # The hand balance reads temperatures and uses CoolProp's IF97 (forward h(p, T),
     # s(p, h), h(p, s)); the extraction flows divide by enthalpy differences of
-    # 240-2800 kJ/kg. Measured (benchmarks/drum_unit.py): flows <= 4e-6, turbine
-    # powers <= 4.5e-5 (h(p, s) of the wet LP exhaust), net power and efficiency
+    # 240-2800 kJ/kg. Measured (benchmarks/drum_unit.py): flows <= 5e-6 but the
+    # deaerator's extraction, 1.6e-5 (2.5 kg/s, a difference of larger flows), turbine
+    # powers <= 4.2e-5 (h(p, s) of the wet LP exhaust), net power and efficiency
     # 1.1e-5, reheater outlet 7 mK. Tolerances 3e-4: a few times the largest of these.
-    for key in ("m_steam", "m_feed", "m_spray", "m_cond", "m_hph", "m_da", "m_lph"):
+    for key in ("m_steam", "m_feed", "m_spray", "m_cond", "m_hph", "m_da", "m_lph", "m_lph2"):
         assert sim[key] == pytest.approx(hand[key], rel=3e-4), key
     # The reheat spray is a small difference: m_rh (h_rho - h_hrh)/(h_hrh - h_fp) with
     # h_rho - h_hrh ~ 15 kJ/kg, so the reheater outlet's 7 mK (~17 J/kg) become
@@ -276,7 +293,7 @@ def test_full_load_steady_state_near_the_design_heat_balance(run):
     # is held at 522 degC by a reheat spray of 0.45 kg/s (design: 540 degC, no
     # spray); and the plant file's heat inputs came from a first balance that counted
     # the spray's heat twice (284.0 MW against this balance's 279.3 MW). Measured:
-    # heat input +1.7 %, steam flow +5.4 %, net power +3.4 %, efficiency +0.74
+    # heat input +1.7 %, steam flow +5.4 %, net power +3.3 %, efficiency +0.71
     # points. Tolerances: 2.5 % on the heat, 8 % on
     # the steam flow and the power, 1.5 points on the efficiency.
     _, res, _ = run
@@ -307,9 +324,9 @@ def test_mass_and_energy_balance_over_the_load_change(run):
     # throughputs: the water through the cycle (~100 kg/s over 3300 s) and the heat
     # (~280 MW). The components' fluxes are conservative (upwind energy flows at the
     # nodes, the drum's and the tanks' own balances), so the mass balance closes to
-    # round-off (measured 3.6e-15 of the throughput); the energy balance to the
+    # round-off (measured 5.5e-15 of the throughput); the energy balance to the
     # integration of the tube walls' m c(T) dT/dt against their stored e(T) (walls
-    # from geometry, steel's c(T)): measured 8.4e-10.
+    # from geometry, steel's c(T)): measured 6.7e-10.
     thr_M = np.trapezoid(res["feed_valve.m"], res.t)
     thr_E = np.sum(np.abs(np.diff(Q_out)))
     assert thr_M > 2e5 and thr_E > 5e11
@@ -323,17 +340,19 @@ def test_load_change_is_followed_and_the_controls_hold(run):
     m = res["turbine_valve.m"]
     m0 = m[0]
     half = (t > 1400) & (t < 1800)  # 50 % firing, settled
-    # the steam flow follows the firing (measured 0.467-0.474 of full load: the feed
+    # the steam flow follows the firing (measured 0.467-0.476 of full load: the feed
     # water is colder at part load, so half the heat makes less than half the steam)
     assert np.all(np.abs(m[half] / m0 - 0.48) < 0.04)
     # drum pressure held at 140 bar by the turbine valve (+-2 bar; measured 1.3 bar)
     assert np.max(np.abs(res["drum.p"] - 140e5)) < 2e5
     # drum level within +-0.1 m of its 2.5 m set point (three-element; measured 0.04)
     assert np.max(np.abs(res["drum.level"] - 2.5)) < 0.1
-    # live steam within +-10 K of 540 degC (measured 4.0 K), +-3 K in the last 300 s
+    # live steam within +-10 K of 540 degC (measured 3.9 K), +-3 K in the last 300 s
     T = res["n_ms.T"] - 813.15
     assert np.max(np.abs(T)) < 10.0 and np.max(np.abs(T[t > 3000])) < 3.0
-    # deaerator and hotwell levels stay in their vessels' working ranges
+    # deaerator and hotwell levels stay in their vessels' working ranges (measured
+    # 2.08-3.00 m and 0.33-1.79 m: the ramp down moves water from the hotwell to the
+    # deaerator, the make-up saturates at 5 kg/s, and it flows back at 50 %)
     assert 2.0 < np.min(res["deaerator.level"]) and np.max(res["deaerator.level"]) < 3.2
     assert 0.2 < np.min(res["condenser.level"]) and np.max(res["condenser.level"]) < 2.0
     # the feed water cools at part load (the HP heater's extraction pressure falls)
@@ -349,13 +368,14 @@ def test_load_change_is_followed_and_the_controls_hold(run):
     assert m[-1] == pytest.approx(m0, rel=0.03)
 
 
-# Deaerator pressure bands [Pa]. Measured (benchmarks/drum_unit.py): 5.22-5.63 bar
-# over the whole run (0.08 bar below the pegging set point while the ramp down
-# outruns the pegging PI, 0.13 bar above 5.5 bar on the ramp up); at 50 %, 1400-1800
-# s, within 0.037 bar of 5.3 bar; after 3100 s within 0.03 bar of 5.5 bar. The
-# bands are these with a margin of about 1.5 to 3 times.
-BAND_DA = 0.2e5
-BAND_DA_HALF = 0.1e5
+# Deaerator pressure bands [Pa]. Measured (benchmarks/drum_unit.py): 5.24-5.69 bar
+# over the whole run (0.06 bar below the pegging set point while the ramp down
+# outruns the pegging PI, 0.19 bar above 5.5 bar on the ramp up, at 2410 s); at 50
+# %, 1400-1800 s, 5.34-5.39 bar, within 0.09 bar of 5.3 bar; after 3100 s within
+# 0.009 bar of 5.5 bar. The bands are these with a margin of about 1.1 to 10 times
+# (1.1 on the whole run's upper edge: 5.69 bar against 5.8).
+BAND_DA = 0.3e5
+BAND_DA_HALF = 0.15e5
 BAND_DA_END = 0.1e5
 
 
@@ -369,10 +389,14 @@ def test_deaerator_pressure_is_held_by_extraction_and_pegging_steam(run):
     assert p_da[0] == pytest.approx(5.5e5, rel=1e-6)
     assert res["pegging_valve.m"][0] < 1e-3
     # half load: the crossover lies below the deaerator, the non-return valve is
-    # shut (at most its leakage, backwards) and the pegging steam holds 5.3 bar
+    # shut (at most its leakage, backwards). The pegging steam opens on the way down
+    # (measured up to 5.6 kg/s at 930 s); at 50 % the deaerator stays just above its
+    # 5.3 bar set point, held by the pegging steam and the HP heater's drain flashing
+    # in it (with LPH2 the condensate arrives at ~125 degC, so the pegging PI may sit
+    # at its lower limit there)
     assert np.all(res["n_xo.p"][half] < p_da[half])
     assert np.all(np.abs(res["da_nrv.m"][half]) < 1e-3)
-    assert np.all(res["pegging_valve.m"][half] > 0.2)  # measured >= 0.36 kg/s
+    assert np.max(res["pegging_valve.m"]) > 1.0
     assert np.all(np.abs(p_da[half] - 5.3e5) < BAND_DA_HALF)
     # through the whole load change the pressure stays within a band around the
     # two set points (5.3-5.5 bar): the ramp at 5 %/min outruns the PIs for a while
@@ -385,7 +409,7 @@ def test_deaerator_pressure_is_held_by_extraction_and_pegging_steam(run):
 
 
 # Hot reheat band [K] around its 522 degC set point. Measured (benchmarks/drum_unit.py):
-# 0.57 K over the whole run, 0.14 K after 3000 s; the bands are about 3 times these.
+# 0.58 K over the whole run, 0.18 K after 3000 s; the bands are about 3 times these.
 BAND_RH = 1.5
 BAND_RH_END = 0.5
 
@@ -394,7 +418,7 @@ def test_hot_reheat_temperature_is_held_by_the_reheat_spray(run):
     _, res, _ = run
     t = res.t
     T = res["n_hrh.T"] - 795.15  # set point 522 degC
-    # the reheater's outlet floats by ~10 K with the load (measured 800.3-809.9 K:
+    # the reheater's outlet floats by ~7 K with the load (measured 799.5-806.8 K:
     # hotter at part load); the spray after it holds the hot reheat
     T_rho = res["n_rho.T"]
     assert np.max(T_rho) - np.min(T_rho) > 5.0
