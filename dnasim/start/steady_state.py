@@ -923,21 +923,14 @@ def open_balances(system, t0, y, count=3) -> list[str]:
     energy, a controller's integral) whose residual at y' = 0 moves their state the
     most, as the relative rate |F_i / (dF_i/dy'_j)| / scale_j [1/s] of the state y_j
     whose derivative they hold (scale_j = max(nominal_j, |y_j|))."""
-    try:
-        f = system.residual(t0, y, np.zeros(system.n))
-    except (ResidualDomainError, DAEError, PlantError):
+    found = _balance_candidates(system, t0, y)
+    if found is None:
         return []
-    pat = sp.csr_matrix(system.pattern_yp)
-    scale = np.maximum(np.asarray(system.nominal, dtype=float), np.abs(y))
-    rows = []
-    for i in range(pat.shape[0]):
-        cols = pat.indices[pat.indptr[i] : pat.indptr[i + 1]]
-        if cols.size == 1 and not system.accumulator[cols[0]]:
-            rows.append((abs(f[i]) / scale[cols[0]], i, int(cols[0])))
+    f, scale, rows = found
     rates = []
     # the rows that look largest with dF_i/dy'_j = 1 (a mass or energy balance), each
     # measured with one more evaluation: at most MAX_BALANCES of them
-    for _, i, j in sorted(rows, reverse=True)[:MAX_BALANCES]:
+    for _, i, j in rows[:MAX_BALANCES]:
         yp = np.zeros(system.n)
         yp[j] = scale[j]
         try:
@@ -1050,14 +1043,14 @@ def _held_rates(system, t0, j, starts, stats):
     return None
 
 
-def _balance_rows(system, t0, y) -> list[tuple[float, int, int]]:
-    """(relative rate, equation i, state j) of the balances with one derivative, of a
-    non-accumulator state, largest |F_i| / scale_j at y' = 0 first (``open_balances``'
-    first ranking)."""
+def _balance_candidates(system, t0, y):
+    """(F at y' = 0, scale, rows) with rows the (relative rate, equation i, state j) of
+    the balances with one derivative, of a non-accumulator state, largest |F_i| /
+    scale_j first (scale_j = max(nominal_j, |y_j|)); None when F cannot be evaluated."""
     try:
         f = system.residual(t0, y, np.zeros(system.n))
     except (ResidualDomainError, DAEError, PlantError):
-        return []
+        return None
     pat = sp.csr_matrix(system.pattern_yp)
     scale = np.maximum(np.asarray(system.nominal, dtype=float), np.abs(y))
     rows = []
@@ -1065,7 +1058,13 @@ def _balance_rows(system, t0, y) -> list[tuple[float, int, int]]:
         cols = pat.indices[pat.indptr[i] : pat.indptr[i + 1]]
         if cols.size == 1 and not system.accumulator[cols[0]]:
             rows.append((abs(f[i]) / scale[cols[0]], i, int(cols[0])))
-    return sorted(rows, reverse=True)
+    return f, scale, sorted(rows, reverse=True)
+
+
+def _balance_rows(system, t0, y) -> list[tuple[float, int, int]]:
+    """The rows of ``_balance_candidates`` (``open_balances``' first ranking)."""
+    found = _balance_candidates(system, t0, y)
+    return [] if found is None else found[2]
 
 
 def no_flow_problems(system, y, count=2) -> list[str]:
