@@ -25,7 +25,8 @@ Around each step the driver
   steps takes its differential variables from the step's Nordsieck polynomial and,
   when the step corrected an algebraic variable by more than its tolerance, its
   algebraic variables (and y') solved from them (``Driver.refine``), each value then
-  kept solved or interpolated by their estimated errors (``Driver._choose``).
+  kept solved or interpolated by their estimated errors (``Driver._choose``); not
+  solved where no value can gain from it (``Driver._over``, ``Driver._gains``).
 """
 
 from __future__ import annotations
@@ -65,11 +66,11 @@ CHOOSE = True
 #: ... both estimates with this many tolerance units added (the solve's convergence)
 CHOOSE_FLOOR = 0.1
 #: decide before the solve whether any value at the point can gain from it
-#: (``Driver._gains``); False: solve every point, then choose (benchmarks/refine_cost.py's
-#: ``choose0``)
+#: (``Driver._over``, ``Driver._gains``); False: solve every point, then choose
+#: (benchmarks/refine_cost.py's ``choose0``)
 PRESKIP = True
-#: ... a value cannot gain where its interpolation error estimate is within this many
-#: tolerance units
+#: ... none can where the solve's first Newton iteration moves none by more than this
+#: many tolerance units (benchmarks/README.md: 1.0 and 0.3 measured)
 PRESKIP_WITHIN = 0.5
 
 
@@ -103,8 +104,9 @@ class Driver:
         # ``_choose``'s counts: [algebraic y kept interpolated, differential y' kept
         # interpolated, points chosen at]
         self.stats_chosen = [0, 0, 0]
-        # ``_gains``' counts of points not solved: [every interpolated value within its
-        # tolerance, the rest kept interpolated by the choice]
+        # the points between steps not solved: [the solve would move no value by more
+        # than PRESKIP_WITHIN of its tolerance (``_over``), the choice would keep those
+        # interpolated (``_gains``)]
         self.stats_skipped = [0, 0]
         self.events = EventLog(switches)
         self.stops = Stops(problem.tstops, self.t0, self.t_end)
@@ -177,6 +179,13 @@ class Driver:
         iteration matrix of its own: the integrator's is left as it is, so the steps
         do not depend on the output. The points of one step (named by the count of
         accepted steps) share the refiner's warm start (``refine.WARM_START``).
+
+        Before the solve (``PRESKIP``): the interpolated point is kept where the solve's
+        first Newton iteration moves no value by more than PRESKIP_WITHIN of its
+        tolerance (``_over``), or where the values it moves more would all be kept
+        interpolated by the choice (``_gains``): tests/plants/pump_shutoff.toml 10707 ->
+        1645 residual evaluations of the run, the same TRUE deviations
+        (benchmarks/README.md).
         """
         solver = self.solver
         if solver.algebraic_correction <= REFINE_SKIP_BELOW:
