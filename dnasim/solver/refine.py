@@ -64,7 +64,11 @@ is then kept solved or interpolated, whichever has the smaller estimated error
 (``driver.Driver._choose``): the polynomial's error at the point is
 ``nordsieck.interpolation_error`` times the step's Delta for every variable, the
 solved value's is the states' share of it propagated through the solve
-(``propagate``).
+(``propagate``). Before solving, ``first_update`` (the solve's first Newton iteration
+with the kept matrix, handed on to it as its start) tells the driver how far the
+solve would move each value: a point where it moves none by more than a fraction of
+its tolerance, or where the choice would keep the ones it moves interpolated, is not
+solved (``driver.Driver._over``, ``_gains``).
 
 Measured to end up less useful (benchmarks/refine_cost.py, 1200 s of each plant):
 CONVERGED = 0.1 or 0.3 of the tolerance (with the algebraic test, before the warm
