@@ -5,7 +5,7 @@
 
 Each plant is run as ``dnasim run`` runs it (``run_plant``, t_end cut to ``--t-end``
 seconds after t_start as in bit_identity_csv.py), with the re-solve on whatever the
-plant file says, in these ways (``--ways``; default off, solve, choose, ref):
+plant file says, in these ways (``--ways``; default off, solve, choose0, choose, ref):
 
 - ``off``: no refinement (the interpolated points; ``refine_output`` off);
 - ``prev``: the refinement as first committed (the convergence test on all unknowns,
@@ -16,8 +16,14 @@ plant file says, in these ways (``--ways``; default off, solve, choose, ref):
 - ``solve``: the current re-solve (``refine.ALGEBRAIC_TEST``: the test on the
   algebraic y alone where the matrix is block triangular; ``refine.WARM_START``,
   ``refine.SPLICE``), every solved value taken (``driver.CHOOSE = False``);
-- ``choose``: the current defaults: ``solve``, then per variable the solved or the
-  interpolated value by their estimated errors (``driver.CHOOSE``, ``Driver._choose``);
+- ``choose0``: ``solve``, then per variable the solved or the interpolated value by
+  their estimated errors (``driver.CHOOSE``, ``Driver._choose``), every point solved
+  first (``driver.PRESKIP = False``: the choice as first committed);
+- ``choose``: the current defaults: ``choose0`` with the decision before the solve
+  (``driver.PRESKIP``): a point is not solved where no value can gain from it (the
+  solve's first Newton iteration moves none by more than ``driver.PRESKIP_WITHIN`` of
+  its tolerance, ``Driver._over``, or the choice would keep those interpolated,
+  ``Driver._gains``);
 - ``ref``: the re-solve at maximum effort: every output point between steps solved
   (no skip), a fresh Jacobian at every point, converged to 1e-3 of the tolerance in
   up to 12 iterations, every solved value taken.
@@ -30,10 +36,13 @@ includes the integration's own error: ``at steps`` below is that floor.
 
 Printed per plant and way: residual evaluations, Jacobians (the solver's counter,
 ``jac_evals``, does not count the refiner's: its Jacobians are counted here as
-``ref.Jacs``; ``splice``: the kept matrices given the integrator's algebraic columns
-instead), CPU seconds (``time.process_time``, the run with its start; the machine
-is shared, repeat for ratios), the output points between steps solved, ``interp``: the
-values the choice kept interpolated (algebraic y and differential y'), and the largest
+``ref.Jacs``, those of its Newton and of ``propagate``; ``splice``: the kept matrices
+given the integrator's algebraic columns instead), CPU seconds (``time.process_time``,
+the run with its start; the machine is shared, repeat for ratios), the output points
+between steps solved, ``interp``: the values the choice kept interpolated (algebraic y
+and differential y'), ``skip``: the points between steps not solved, where the solve
+would move no value by more than ``driver.PRESKIP_WITHIN`` of its tolerance (``_over``)
++ where the choice would keep the others interpolated (``_gains``), and the largest
 deviations of the output points' algebraic variables in units of their tolerance,
 max_i |y_i - y_ref,i| / (rtol |y_ref,i| + atol_i):
 
@@ -60,8 +69,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-WAYS = ("off", "prev", "rate", "solve", "choose", "ref")
-DEFAULT_WAYS = ("off", "solve", "choose", "ref")
+WAYS = ("off", "prev", "rate", "solve", "choose0", "choose", "ref")
+DEFAULT_WAYS = ("off", "solve", "choose0", "choose", "ref")
 
 
 @contextlib.contextmanager
@@ -91,7 +100,7 @@ def run_way(path: Path, t_end_cut: float, way: str, true_divisor: float = 8.0, t
         sim.output_interval, sim.t_eval = None, tuple(t_eval)
     points, at_steps, info = [], [], {"refiner_jacs": 0}
     emit, init, take = output.Output._emit, driver.Driver.__init__, output.Output.step
-    call, newton = refine.AlgebraicRefiner.__call__, refine.AlgebraicRefiner._newton
+    call, fresh_matrix = refine.AlgebraicRefiner.__call__, refine.AlgebraicRefiner._fresh_matrix
 
     def record(self, t, y, yp):
         points.append((t, np.array(y, dtype=float), np.array(yp, dtype=float)))
@@ -106,9 +115,9 @@ def run_way(path: Path, t_end_cut: float, way: str, true_divisor: float = 8.0, t
         info["rtol"], info["atol"] = self.opt["rtol"], problem.atol
         info["driver"], info["names"] = self, list(problem.names)
 
-    def counted(self, t, y, yp, h, fresh):
-        info["refiner_jacs"] += bool(fresh)
-        return newton(self, t, y, yp, h, fresh)
+    def counted(self, *args, **kw):
+        info["refiner_jacs"] += 1
+        return fresh_matrix(self, *args, **kw)
 
     def fresh_always(self, *args, **kw):
         self.kept = False
@@ -118,9 +127,11 @@ def run_way(path: Path, t_end_cut: float, way: str, true_divisor: float = 8.0, t
         stack.enter_context(_patched(output.Output, "_emit", record))
         stack.enter_context(_patched(output.Output, "step", stepped))
         stack.enter_context(_patched(driver.Driver, "__init__", grab))
-        stack.enter_context(_patched(refine.AlgebraicRefiner, "_newton", counted))
-        if way != "choose":
+        stack.enter_context(_patched(refine.AlgebraicRefiner, "_fresh_matrix", counted))
+        if way not in ("choose", "choose0"):
             stack.enter_context(_patched(driver, "CHOOSE", False))
+        if way == "choose0":
+            stack.enter_context(_patched(driver, "PRESKIP", False))
         if way in ("prev", "rate"):
             stack.enter_context(_patched(refine, "ALGEBRAIC_TEST", False))
             stack.enter_context(_patched(refine, "WARM_START", False))
@@ -154,6 +165,7 @@ def run_way(path: Path, t_end_cut: float, way: str, true_divisor: float = 8.0, t
         "solves": int(stats.get("output_solves", 0)),
         "splices": 0 if d._refiner is None else d._refiner.stats_spliced,
         "interpolated": d.stats_chosen[0] + d.stats_chosen[1],
+        "skipped": tuple(d.stats_skipped),
         "cpu": cpu,
         "status": outcome.status,
         "driver": d,
@@ -242,8 +254,9 @@ def main(argv=None) -> int:
         ways.append("ref")
     paths = [Path(p) for p in args.plants] or sorted((ROOT / "plants").glob("*.toml"))
     print(
-        f"{'plant':<22} {'way':<6} {'steps':>6} {'res.evals':>9} {'Jacs':>5} {'ref.Jacs':>8} "
-        f"{'solves':>6} {'splice':>6} {'interp':>6} {'CPU s':>6} {'dev alg':>8} {'dev yp':>8} "
+        f"{'plant':<22} {'way':<7} {'steps':>6} {'res.evals':>9} {'Jacs':>5} {'ref.Jacs':>8} "
+        f"{'solves':>6} {'splice':>6} {'interp':>6} {'skip':>9} {'CPU s':>6} "
+        f"{'dev alg':>8} {'dev yp':>8} "
         f"{'points':>11} {'true btw':>8} {'at steps':>8} {'excess':>8} {'worst':<18} "
         f"{'value':>10} {'true':>10}"
     )
@@ -258,10 +271,11 @@ def main(argv=None) -> int:
             r = runs.get(w, true)
             dy, dp, n_cmp = deviation(r, runs["ref"])
             compared = f"{n_cmp}/{len(r['points'])}"
+            skip = "{}+{}".format(*r["skipped"])
             line = (
-                f"{p.stem[:22]:<22} {w:<6} {r['steps']:>6} {r['residual_evals']:>9} "
+                f"{p.stem[:22]:<22} {w:<7} {r['steps']:>6} {r['residual_evals']:>9} "
                 f"{r['jac_evals']:>5} {r['refiner_jacs']:>8} {r['solves']:>6} "
-                f"{r['splices']:>6} {r['interpolated']:>6} {r['cpu']:>6.2f} "
+                f"{r['splices']:>6} {r['interpolated']:>6} {skip:>9} {r['cpu']:>6.2f} "
                 f"{dy:>8.3g} {dp:>8.3g} {compared:>11}"
             )
             if true is not None and w != "true":

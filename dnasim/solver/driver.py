@@ -25,7 +25,8 @@ Around each step the driver
   steps takes its differential variables from the step's Nordsieck polynomial and,
   when the step corrected an algebraic variable by more than its tolerance, its
   algebraic variables (and y') solved from them (``Driver.refine``), each value then
-  kept solved or interpolated by their estimated errors (``Driver._choose``).
+  kept solved or interpolated by their estimated errors (``Driver._choose``); not
+  solved where no value can gain from it (``Driver._over``, ``Driver._gains``).
 """
 
 from __future__ import annotations
@@ -64,6 +65,13 @@ REFINE_SKIP_BELOW = 1.0
 CHOOSE = True
 #: ... both estimates with this many tolerance units added (the solve's convergence)
 CHOOSE_FLOOR = 0.1
+#: decide before the solve whether any value at the point can gain from it
+#: (``Driver._over``, ``Driver._gains``); False: solve every point, then choose
+#: (benchmarks/refine_cost.py's ``choose0``)
+PRESKIP = True
+#: ... none can where the solve's first Newton iteration moves none by more than this
+#: many tolerance units (benchmarks/README.md: 1.0 and 0.3 measured)
+PRESKIP_WITHIN = 0.5
 
 
 class Driver:
@@ -92,10 +100,14 @@ class Driver:
             refine=self.refine if options.get("refine_output", True) else None,
         )
         self._refiner = None  # ``refine``'s AlgebraicRefiner, made at first use
-        self._estimate = None  # (step, propagated Delta) of ``_choose``
+        self._estimate = None  # (step, propagated Delta, matrix, solved): ``_step_estimate``
         # ``_choose``'s counts: [algebraic y kept interpolated, differential y' kept
         # interpolated, points chosen at]
         self.stats_chosen = [0, 0, 0]
+        # the points between steps not solved: [the solve would move no value by more
+        # than PRESKIP_WITHIN of its tolerance (``_over``), the choice would keep those
+        # interpolated (``_gains``)]
+        self.stats_skipped = [0, 0]
         self.events = EventLog(switches)
         self.stops = Stops(problem.tstops, self.t0, self.t_end)
         self.status, self.message = 0, "The solver reached the end of the interval."
@@ -167,10 +179,18 @@ class Driver:
         iteration matrix of its own: the integrator's is left as it is, so the steps
         do not depend on the output. The points of one step (named by the count of
         accepted steps) share the refiner's warm start (``refine.WARM_START``).
+
+        Before the solve (``PRESKIP``): the interpolated point is kept where the solve's
+        first Newton iteration moves no value by more than PRESKIP_WITHIN of its
+        tolerance (``_over``), or where the values it moves more would all be kept
+        interpolated by the choice (``_gains``): tests/plants/pump_shutoff.toml 10707 ->
+        1645 residual evaluations of the run, the same TRUE deviations
+        (benchmarks/README.md).
         """
         solver = self.solver
         if solver.algebraic_correction <= REFINE_SKIP_BELOW:
             return y, yp
+        pre = self._interpolation_estimate(t) if CHOOSE and PRESKIP else None
         if self._refiner is None:
             m = self.matrix
             matrix = IterationMatrix(
@@ -195,8 +215,19 @@ class Driver:
                 self.stats,
                 source=m,
             )
+        start = None
+        if pre is not None:
+            over, start = self._over(t, y, yp)
+            if not over.any():
+                self.stats_skipped[0] += 1
+                return y, yp
+            if not self._gains(t, y, yp, pre, over):
+                self.stats_skipped[1] += 1
+                return y, yp
         try:
-            y_new, yp_new = self._refiner(t, y, yp, solver.h_used, step=self.stats.steps)
+            y_new, yp_new = self._refiner(
+                t, y, yp, solver.h_used, step=self.stats.steps, start=start
+            )
         except DAEError:
             self.stats.output_solve_failures += 1
             return y, yp
@@ -235,29 +266,97 @@ class Driver:
         s = (t - solver.t) / h
         a, b = nd.interpolation_error(q, s)
         amax = nd.largest_interpolation_error(q)
-        step = self.stats.steps
-        if self._estimate is None or self._estimate[0] != step:
-            dx = np.where(self.algebraic, 0.0, delta) * amax
-            du = self._refiner.propagate(t, y_new, yp_new, dx, h)
-            self._estimate = (step, du)
-        du = self._estimate[1]
+        du = self._step_estimate(t, y_new, yp_new)
         if du is None:
             return y_new, yp_new
-        alg = self.algebraic
-        r = abs(a) / amax
         tol = self.opt["rtol"] * np.abs(y_new) + self.problem.atol
-        e_int_y = abs(a) * np.abs(delta) + CHOOSE_FLOOR * tol
-        e_res_y = r * np.abs(du[0]) + CHOOSE_FLOOR * tol
-        use_y = alg & (e_int_y < e_res_y)
-        e_int_p = abs(b) / h * np.abs(delta) + CHOOSE_FLOOR * tol / h
-        e_res_p = r * np.abs(du[1]) + CHOOSE_FLOOR * tol / h
-        use_p = ~alg & (e_int_p < e_res_p)
+        use_y, use_p = self._interpolated_better(a, b, amax, h, delta, du, tol)
         self.stats_chosen[0] += int(np.count_nonzero(use_y))
         self.stats_chosen[1] += int(np.count_nonzero(use_p))
         self.stats_chosen[2] += 1
         if not (use_y.any() or use_p.any()):
             return y_new, yp_new
         return np.where(use_y, y, y_new), np.where(use_p, yp, yp_new)
+
+    def _step_estimate(self, t, y, yp, solved=True):
+        """The states' share of the step's interpolation error carried through the solve
+        (``_choose``), once a step: -M^-1 (F(y + dx) - F(y)), dx = a_max Delta_d, at the
+        step's first point that asks (``solved`` False: (y, yp) interpolated, before a
+        solve, ``_gains``; True: solved) with the refiner's matrix. One formed before a
+        solve is formed again after a solve that changed the matrix (a fresh one or a
+        splice: the kept one no longer served). None where it cannot be formed."""
+        step, m = self.stats.steps, self._refiner.matrix
+        est = self._estimate
+        if est is not None and est[0] == step and (est[3] or not solved or est[2] is m.matrix):
+            return est[1]
+        solver = self.solver
+        amax = nd.largest_interpolation_error(solver.q_used)
+        dx = np.where(self.algebraic, 0.0, solver.step_delta) * amax
+        du = self._refiner.propagate(t, y, yp, dx, solver.h_used)
+        self._estimate = (step, du, m.matrix, solved) if du is not None else None
+        return du
+
+    def _interpolated_better(self, a, b, amax, h, delta, du, tol):
+        """(algebraic y, differential y') where the interpolated value has the smaller
+        estimated error (``_choose``; CHOOSE_FLOOR of the tolerance added to both)."""
+        alg = self.algebraic
+        r = abs(a) / amax
+        e_int_y = abs(a) * np.abs(delta) + CHOOSE_FLOOR * tol
+        e_res_y = r * np.abs(du[0]) + CHOOSE_FLOOR * tol
+        e_int_p = abs(b) / h * np.abs(delta) + CHOOSE_FLOOR * tol / h
+        e_res_p = r * np.abs(du[1]) + CHOOSE_FLOOR * tol / h
+        return alg & (e_int_y < e_res_y), ~alg & (e_int_p < e_res_p)
+
+    def _interpolation_estimate(self, t):
+        """(a, b, amax, delta) at the point t of the last step: the polynomial's error
+        coefficients there and their largest |a| in the step
+        (``nordsieck.interpolation_error``), and the step's Delta; None without it."""
+        solver = self.solver
+        delta = solver.step_delta
+        if delta is None:
+            return None
+        q = solver.q_used
+        a, b = nd.interpolation_error(q, (t - solver.t) / solver.h_used)
+        return a, b, nd.largest_interpolation_error(q), delta
+
+    def _over(self, t, y, yp):
+        """(over, start) at the point (y, yp) interpolated at t: ``over``, the values
+        the solve would move by more than PRESKIP_WITHIN of their tolerance, estimated
+        by the solve's first Newton iteration with the refiner's kept matrix (from its
+        warm start; ``AlgebraicRefiner.first_update``; to first order the solved value
+        less the interpolated one, d): |d| > PRESKIP_WITHIN (rtol |y| + atol) for an
+        algebraic y, h |d| for a differential y'; ``start``: that iteration's start and
+        residual, handed to the solve (the check costs a back-substitution). Without a
+        kept matrix or a finite residual every value is over and ``start`` None.
+
+        The polynomial's own estimate |a Delta| was measured to be less reliable for
+        this: m = tanh(50 (x - 1/2)) interpolated 14 tolerance units off F where |a
+        Delta| said 1 (tests/test_output_between_steps.py; with the update: 0.94)."""
+        first = self._refiner.first_update(t, y, yp, step=self.stats.steps)
+        if first is None:
+            return np.ones(y.shape, dtype=bool), None
+        start, d = first
+        tol = self.opt["rtol"] * np.abs(y) + self.problem.atol
+        e = np.where(self.algebraic, np.abs(d[0]), self.solver.h_used * np.abs(d[1]))
+        return e > PRESKIP_WITHIN * tol, start
+
+    def _gains(self, t, y, yp, pre, over) -> bool:
+        """Before the solve at the point (y, yp) interpolated at t: can any value gain
+        from it? Only one the solve moves by more than its tolerance (``over``,
+        ``_over``) and which the choice would then keep solved: the states' propagated
+        error (``_step_estimate``, formed here from the interpolated point, once a step,
+        with the refiner's kept matrix) below its interpolation error (``pre``,
+        ``_interpolation_estimate``). For an algebraic y that comparison is the same at
+        every point of the step (both estimates scale with |a|). True (solve) where the
+        estimate cannot be formed."""
+        a, b, amax, delta = pre
+        du = self._step_estimate(t, y, yp, solved=False)
+        if du is None:
+            return True
+        h = self.solver.h_used
+        tol = self.opt["rtol"] * np.abs(y) + self.problem.atol
+        use_y, use_p = self._interpolated_better(a, b, amax, h, delta, du, tol)
+        return bool(np.any(over & ~(use_y | use_p)))
 
     # -- set-up ------------------------------------------------------------------------
     def _start(self):

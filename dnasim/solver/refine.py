@@ -64,7 +64,11 @@ is then kept solved or interpolated, whichever has the smaller estimated error
 (``driver.Driver._choose``): the polynomial's error at the point is
 ``nordsieck.interpolation_error`` times the step's Delta for every variable, the
 solved value's is the states' share of it propagated through the solve
-(``propagate``).
+(``propagate``). Before solving, ``first_update`` (the solve's first Newton iteration
+with the kept matrix, handed on to it as its start) tells the driver how far the
+solve would move each value: a point where it moves none by more than a fraction of
+its tolerance, or where the choice would keep the ones it moves interpolated, is not
+solved (``driver.Driver._over``, ``_gains``).
 
 Measured to end up less useful (benchmarks/refine_cost.py, 1200 s of each plant):
 CONVERGED = 0.1 or 0.3 of the tolerance (with the algebraic test, before the warm
@@ -118,7 +122,8 @@ class AlgebraicRefiner:
     t solved from the differential y (module doc). ``h`` weights the y' unknowns (the
     step size: a change d of y' moves y by about h d); ``step`` names the step whose
     polynomial gave (y, yp) (the points of one step share their warm start; None: no
-    warm start). Raises DAEError when even the globalised Newton fails.
+    warm start); ``start``: (y0, yp0, F there) of ``first_update``, where the Newton
+    starts (its warm start). Raises DAEError when even the globalised Newton fails.
 
     ``matrix``: an ``IterationMatrix`` of its own (its colouring; the integrator's
     matrix and LU are never touched, so the steps do not depend on the output);
@@ -149,10 +154,18 @@ class AlgebraicRefiner:
         self._alg_entries = None  # the pattern's entries in algebraic columns
         self.stats_spliced = 0
 
-    def __call__(self, t, y, yp, h, step=None):
+    def __call__(self, t, y, yp, h, step=None, start=None):
         result = None
-        guess = self._guess(t, step) if self.warm and step is not None and self.kept else None
-        if guess is not None:
+        if start is not None and self.kept:  # F at the start given (``first_update``)
+            y0, yp0, f0 = start
+            try:
+                result = self._newton(t, y0, yp0, h, False, f=f0)
+            except ResidualDomainError:
+                result = None
+            guess = None  # the start was the warm start
+        else:
+            guess = self._guess(t, step) if self.warm and step is not None and self.kept else None
+        if result is None and guess is not None:
             try:
                 result = self._newton(t, y + guess[0], yp + guess[1], h, False)
             except ResidualDomainError:
@@ -164,6 +177,27 @@ class AlgebraicRefiner:
             last = self.carry[1][-1:] if self.carry is not None and self.carry[0] == step else []
             self.carry = (step, [*last, c])
         return result
+
+    def first_update(self, t, y, yp, step=None):
+        """The first Newton iteration of the solve at the point (y, yp), before it:
+        ((y0, yp0, f), (dy, dy')) with (y0, yp0) the Newton's start (the warm start,
+        ``_guess``, else the point), f = F there and (dy, dy') the start plus the
+        update with the kept matrix less the point: to first order what the solve
+        changes (one residual evaluation, the solve's first, handed to ``__call__`` as
+        ``start``, and one back-substitution). None without a kept matrix or where F
+        is not finite at the start."""
+        if not self.kept:
+            return None
+        guess = self._guess(t, step) if self.warm and step is not None else None
+        y0, yp0 = (y, yp) if guess is None else (y + guess[0], yp + guess[1])
+        try:
+            f = self.F(t, y0, yp0)
+        except ResidualDomainError:
+            return None
+        if not np.all(np.isfinite(f)):
+            return None
+        d = self.matrix.solve(-f)
+        return (y0, yp0, f), (y0 - y + d * self.ymask, yp0 - yp + d * self.ypmask)
 
     def propagate(self, t, y, yp, dx, h):
         """The change (dy, dy') of the solved unknowns (the algebraic y, the differential
@@ -299,10 +333,11 @@ class AlgebraicRefiner:
     def _weights(self, y, h):
         return 1.0 / (self.rtol * np.abs(y) + self.atol) * (self.ymask + h * self.ypmask)
 
-    def _newton(self, t, y, yp, h, fresh):
-        """Modified Newton from (y, yp); (y, yp) when converged, else None."""
+    def _newton(self, t, y, yp, h, fresh, f=None):
+        """Modified Newton from (y, yp) (``f``: F there where known); (y, yp) when
+        converged, else None."""
         y, yp = y.copy(), yp.copy()
-        f = self.F(t, y, yp)
+        f = self.F(t, y, yp) if f is None else f
         if not np.all(np.isfinite(f)):
             return None
         uw = self._weights(y, h)
