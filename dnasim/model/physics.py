@@ -398,6 +398,64 @@ def blend_to_own(a, b, eps):
     return c
 
 
+#: the LMTD's excess over the own-state heat flow is left exact up to this many times
+#: the excess enthalpy inflow, and held below LMTD_EXCESS_CAP times it (``lmtd_excess``)
+LMTD_EXCESS_EXACT = 0.8
+LMTD_EXCESS_CAP = 1.0
+
+
+def net_inflow(m, eps):
+    """A smooth max(m, 0) [kg/s] that vanishes at m = 0: (m + sqrt(m^2 + eps^2))/2
+    m^2/(m^2 + eps^2), eps [kg/s] (the upwind band). Unlike ``upwind_weight`` (3/16 eps
+    at rest: the band's phantom inflow from both sides) it is 0 for a stagnant face,
+    m (1 - eps^2/m^2 + ...) for m >> eps and below eps^2/(4|m|) for m << -eps; its slope
+    is below 1.1. Used by ``lmtd_excess``'s bound, which must vanish at rest."""
+    m = np.asarray(m, dtype=float)
+    m2, e2 = m * m, eps * eps
+    return 0.5 * (m + np.sqrt(m2 + e2)) * m2 / (m2 + e2)
+
+
+def lmtd_excess(dQ, H_x, Q_floor):
+    """The log-mean form's excess heat flow over the own-state ("outlet") form, bounded
+    by the enthalpy the inflow carries in [W].
+
+    A volume i of a channel with face inflow weights a, b [kg/s] (``upwind_weight`` of
+    its two face flows) exchanges Q_i = kA_i LMTD(T_a - T_w, T_i - T_w) [W] with its
+    wall; its own-state form is Q_own = kA_i (T_i - T_w) [W]. The excess dQ = Q_i - Q_own
+    is what the plug-flow picture adds for the inflow's temperature T_a. The excess
+    enthalpy inflow is H_x = a (h_left - h_i) + b (h_right - h_i) [W], with a, b here the
+``net_inflow`` of its two face flows (zero at rest). In a steady
+    volume Q_i = H_x (energy balance) and, the outlet being nearer the wall temperature
+    than the inlet, Q_own has Q_i's sign and a smaller size, so 0 <= dQ/H_x < 1 (for a
+    constant c_p: dQ/Q_i = 1 - NTU e^-NTU/(1 - e^-NTU), NTU = kA_i/(m c_p)). As the flow
+    vanishes inside the upwind band, T_a moves from the upwind neighbour's temperature
+    to T_i within m_eps, so dQ is as steep as kA_i (T_up - T_i)/m_eps [W per kg/s]
+    (measured: 1.5e-3 kg/s of steam moved a boiling volume's Q by 79 kW) while the
+    inflow carries only H_x ~ m (h_up - h_i).
+
+    Returned: L F(dQ/L) with L = sqrt(H_x^2 + Q_floor^2) [W] and F odd, F(r) = r for
+    |r| <= LMTD_EXCESS_EXACT (every steady state, and transients up to twice the
+    inflow's excess enthalpy: exactly the LMTD), F = LMTD_EXCESS_CAP for |r| >= 4,
+    between F = 2 + t - t^3/4 + t^4/16 with t = |r| - 2 (C2 at both joins, F' =
+    (1 - t/2)^2 (1 + t) >= 0). Its slope in a face flow m is then of the order of
+    |h_up - h_i| [J/kg] (bounded as m -> 0) instead of kA_i |T_up - T_i|/m_eps.
+    Q_floor [W] (> 0; the channel's 1e-3 kA_i dT_reg) keeps L smooth and positive where
+    H_x = 0: a stagnant volume (H_x = 0) exchanges Q_own to within Q_floor, i.e. at its
+    own temperature to within 1e-3 dT_reg."""
+    L = np.sqrt(H_x * H_x + Q_floor * Q_floor) + 1e-300  # > 0 where kA_i = H_x = 0
+    r = dQ / L
+    ar = np.abs(r)
+    if np.ndim(ar) == 0:
+        if ar <= LMTD_EXCESS_EXACT:
+            return dQ
+    elif (ar <= LMTD_EXCESS_EXACT).all():
+        return dQ  # every volume in normal flow: bit-identical to the plain LMTD
+    w = 2.0 * (LMTD_EXCESS_CAP - LMTD_EXCESS_EXACT)  # the join's width in r
+    t = np.clip((ar - LMTD_EXCESS_EXACT) * (2.0 / w), 0.0, 2.0)
+    F = LMTD_EXCESS_EXACT + 0.5 * w * (t - 0.25 * t**3 + 0.0625 * t**4)
+    return np.where(ar <= LMTD_EXCESS_EXACT, dQ, np.sign(r) * L * F)
+
+
 def energy_in(m, h_node, h_own, eps):
     """Energy flow INTO a component through a port [W], upwind by the actual flow.
 

@@ -94,7 +94,9 @@ from dnasim.model.physics import (
     blend_to_own,
     friction_dp,
     lmtd,
+    lmtd_excess,
     lmtd_numpy,
+    net_inflow,
     saturation_enthalpies,
     upwind_mean_weighted,
     upwind_weight,
@@ -680,6 +682,14 @@ class ChannelRows:
             mv = 0.5 * (m[self.v_in] + m[self.v_out])
             kA = flow_scaled_kA(kA, mv, self.m_kA, self.kA_exponent, self.m_reg)
         heat = Q - kA * dT
+        if self.heat_transfer == "lmtd" and not self.adiabatic:
+            # the LMTD's excess over the own-state form, bounded by the excess enthalpy
+            # inflow (``physics.lmtd_excess``): zero where no volume is beyond it
+            hi, eps = h[own], self.eps_volume
+            ax, bx = net_inflow(m[self.v_in], eps), net_inflow(-m[self.v_out], eps)
+            H_x = ax * (h[self.left] - hi) + bx * (h[self.right] - hi)
+            dQ = kA * (dT - (T_i - T_wall))
+            heat = heat - (lmtd_excess(dQ, H_x, 1e-3 * kA * self.dT_reg) - dQ)
         mf = m[self.v_in]
         rho_f = upwind_mean_weighted(a, wm[self.v_in], rho[self.left], rho[own])
         rho_head = rho_f
