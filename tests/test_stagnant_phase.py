@@ -129,9 +129,10 @@ def test_closed_feed_line_boils_at_rest_and_ends_superheated(boiling):
         assert p == pytest.approx(p_drum, rel=1e-6)
         # superheated steam at the wall temperature, by IF97 from (p, h): the first
         # four volumes within 2e-3 K (measured); the last one, next to the open drum
-        # valve, 0.117 K ("outlet") or 0.115 K (LMTD) below the wall (measured): the valve's regularised exchange at
-        # zero flow (physics.upwind_weight, w(0) = 3/16 m_eps) brings in the drum
-        # water's enthalpy, kA_i dT = 2 kW/K x 0.117 K = 234 W. Bounds: ~2.5 times these.
+        # valve, 0.117 K ("outlet") or 0.115 K (LMTD) below the wall (measured): the
+        # valve's regularised exchange at zero flow (physics.upwind_weight, w(0) =
+        # 3/16 m_eps) brings in the drum water's enthalpy, kA_i dT = 2 kW/K x 0.117 K =
+        # 234 W. Bounds: ~2.5 times these.
         T = PropsSI("T", "P", p, "H", h, WATER)
         assert abs(T - T_wall) < (0.3 if i == 4 else 5e-3), (i, T)
     # the mass left in the line is steam at (p_drum, T_wall): rho V, by IF97 (measured
