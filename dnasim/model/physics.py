@@ -427,14 +427,14 @@ def lmtd_excess(dQ, H_x, Q_floor):
     Q_i = H_x (energy balance) and, its outlet being nearer the wall temperature than
     its inlet, Q_own has Q_i's sign and a smaller size, so 0 <= dQ/H_x < 1; for a
     constant c_p, dQ/H_x = 1 - NTU e^-NTU/(1 - e^-NTU) with NTU = kA_i/(m c_p) per
-    volume: 0.42 at NTU = 1, 0.69 at 2, 0.80 at 3.2. As the flow vanishes inside the
+    volume: 0.42 at NTU = 1, 0.69 at 2, 0.80 at 2.66. As the flow vanishes inside the
     upwind band, T_a moves from the upwind neighbour's temperature to T_i within m_eps,
     so dQ is as steep as kA_i (T_up - T_i)/m_eps [W per kg/s] (measured: 1.5e-3 kg/s of
     steam into a boiling volume moved its Q by 79 kW) while that inflow carries only
     H_x ~ m (h_up - h_i) (1.7 kW).
 
     Returned [W]: L F(dQ/L) with L = sqrt(H_x^2 + Q_floor^2) and F odd, F(r) = r for
-    |r| <= LMTD_EXCESS_EXACT (= 0.8: steady states up to NTU ~ 3 per volume, and
+    |r| <= LMTD_EXCESS_EXACT (= 0.8: steady states up to NTU = 2.66 per volume, and
     transients within 0.8 of the inflow's excess enthalpy, are exactly the LMTD),
     F = LMTD_EXCESS_CAP (= 1: the wall cannot bring the inflow beyond the volume's own
     state) for |r| >= 2 CAP - EXACT, between them EXACT + (w/2) P(2 t/w), t = |r| - EXACT,

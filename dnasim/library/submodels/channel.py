@@ -43,7 +43,7 @@ inflow vanishes (a stagnant or emptying volume exchanges heat at its own
 temperature). B = ``physics.lmtd_excess`` bounds the LMTD's excess dQ_i [W] over the
 own-state form by the excess enthalpy inflow H_x = a'(h(S_i) - h_i) + b'(h(S_{i+2}) -
 h_i) [W] (a', b' = ``physics.net_inflow`` of m[i], -m[i+1] [kg/s], zero at rest): B(dQ)
-= dQ while |dQ| <= 0.8 |H_x| (every steady state with NTU_i <~ 3 per volume: there
+= dQ while |dQ| <= 0.8 |H_x| (every steady state with NTU_i <= 2.66 per volume: there
 0 <= dQ/H_x < 1 by the energy balance), never beyond |H_x| (plus 1e-3 kA_i dT_reg [W]).
 Without it T_a, which moves from the upwind neighbour's temperature to T_i within
 the upwind band, made Q_i as steep as kA_i |T_up - T_i|/m_eps in a face flow inside
