@@ -402,6 +402,11 @@ def blend_to_own(a, b, eps):
 #: the excess enthalpy inflow, and held below LMTD_EXCESS_CAP times it (``lmtd_excess``)
 LMTD_EXCESS_EXACT = 0.8
 LMTD_EXCESS_CAP = 1.0
+#: a floor specific heat [J/(kg K)] (below water's, steam's and air's c_p) by which the
+#: channel adds the inflow's temperature excess to the bound: in a steady flow with a
+#: pressure drop T_up - T_i is not (h_up - h_i)/c_p (measured on plants/superheater_line.toml:
+#: without it the bound acted in normal flow and moved a wall temperature by 0.013 K)
+LMTD_EXCESS_CP = 1000.0
 
 
 def net_inflow(m, eps):
@@ -441,10 +446,14 @@ def lmtd_excess(dQ, H_x, Q_floor):
     w = 2 (CAP - EXACT), P(s) = s - s^3/4 + s^4/16 (C2 at both joins, P' = (1 - s/2)^2
     (1 + s) >= 0). The result's slope in a face flow m is then of the order of
     |h_up - h_i| [J/kg], bounded as m -> 0, instead of kA_i |T_up - T_i|/m_eps.
-    Q_floor [W] (> 0; the channel passes 1e-3 kA_i dT_reg) keeps L smooth and positive
-    where H_x = 0: a stagnant volume exchanges Q_own to within Q_floor, i.e. at its own
-    temperature to within 1e-3 dT_reg. Where no |r| exceeds EXACT, dQ itself is
-    returned (bit-identical to the plain LMTD)."""
+    Q_floor [W] (> 0) keeps L smooth and positive where H_x = 0; the channel passes
+    hypot(H_T, 1e-3 kA_i dT_reg) with H_T = LMTD_EXCESS_CP hypot(a (T_left - T_i),
+    b (T_right - T_i)) [W], the inflow's temperature excess at a floor heat capacity
+    (with a pressure drop, T_up - T_i is not (h_up - h_i)/c_p and H_x alone can be
+    near zero in a steady flow whose dQ is not). Both vanish at rest: a stagnant volume
+    exchanges Q_own to within 1e-3 kA_i dT_reg, i.e. heat at its own temperature.
+    Where no |r| exceeds EXACT, dQ itself is returned (bit-identical to the plain
+    LMTD)."""
     L = np.sqrt(H_x * H_x + Q_floor * Q_floor) + 1e-300  # > 0 where kA_i = H_x = 0
     r = dQ / L
     ar = np.abs(r)

@@ -44,7 +44,8 @@ temperature). B = ``physics.lmtd_excess`` bounds the LMTD's excess dQ_i [W] over
 own-state form by the excess enthalpy inflow H_x = a'(h(S_i) - h_i) + b'(h(S_{i+2}) -
 h_i) [W] (a', b' = ``physics.net_inflow`` of m[i], -m[i+1] [kg/s], zero at rest): B(dQ)
 = dQ while |dQ| <= 0.8 |H_x| (every steady state with NTU_i <= 2.66 per volume: there
-0 <= dQ/H_x < 1 by the energy balance), never beyond |H_x| (plus 1e-3 kA_i dT_reg [W]).
+0 <= dQ/H_x < 1 by the energy balance), never beyond |H_x| (plus the inflow's
+temperature excess at 1000 J/(kg K), ``physics.LMTD_EXCESS_CP``, and 1e-3 kA_i dT_reg).
 Without it T_a, which moves from the upwind neighbour's temperature to T_i within
 the upwind band, made Q_i as steep as kA_i |T_up - T_i|/m_eps in a face flow inside
 the band (79 kW for 1.5e-3 kg/s into a boiling volume: issue 20 item 9); with it the
@@ -97,6 +98,7 @@ import numpy as np
 
 from dnasim.model.component import Equation, Switch, Variable
 from dnasim.model.physics import (
+    LMTD_EXCESS_CP,
     LMTD_NUMBA_MIN,
     M_EPS_REL,
     G,
@@ -698,8 +700,12 @@ class ChannelRows:
             hi, eps = h[own], self.eps_volume
             ax, bx = net_inflow(m[self.v_in], eps), net_inflow(-m[self.v_out], eps)
             H_x = ax * (h[self.left] - hi) + bx * (h[self.right] - hi)
+            # the inflow's temperature excess at a floor heat capacity (a pressure drop
+            # moves T at equal h: a steam line's Joule-Thomson cooling)
+            H_T = LMTD_EXCESS_CP * np.hypot(ax * (T[self.left] - T_i), bx * (T[self.right] - T_i))
             dQ = kA * (dT - (T_i - T_wall))
-            heat = heat - (lmtd_excess(dQ, H_x, 1e-3 * kA * self.dT_reg) - dQ)
+            bound = np.hypot(H_T, 1e-3 * kA * self.dT_reg)
+            heat = heat - (lmtd_excess(dQ, H_x, bound) - dQ)
         mf = m[self.v_in]
         rho_f = upwind_mean_weighted(a, wm[self.v_in], rho[self.left], rho[own])
         rho_head = rho_f
