@@ -12,7 +12,8 @@ difference of the two runs over the plain run's output times (the bounded one
 interpolated linearly onto them), per output, relative to the larger of that output's
 range and 1e-6 (the solvers' rtol) of its size: max |x_bounded - x_plain| /
 max(ptp(x_plain), 1e-6 max |x_plain|) over every output, with where it is and the two
-values; below 1 means within the solver's tolerance.
+values, then the same for the end values alone; below 1 means within the solver's
+tolerance.
 """
 
 from __future__ import annotations
@@ -81,7 +82,14 @@ def main(argv) -> int:
                     if abs(b[k] - a[k]) / scale > worst:
                         worst = abs(b[k] - a[k]) / scale
                         which = f"{name} at {out[False].t[k]:.6g} s: {a[k]:.9g} -> {b[k]:.9g}"
-                diff = f"{worst:.2e}  {which}"
+                end, end_which = 0.0, ""
+                for name in res.names:
+                    a, b = np.asarray(out[False][name]), np.asarray(res[name])
+                    scale = max(np.ptp(a), 1e-6 * np.max(np.abs(a)), 1e-300)
+                    if abs(b[-1] - a[-1]) / scale > end:
+                        end = abs(b[-1] - a[-1]) / scale
+                        end_which = f"{name}: {a[-1]:.9g} -> {b[-1]:.9g}"
+                diff = f"{worst:.2e}  {which}; at the end {end:.2e}  {end_which}"
             print(
                 f"{path.split('/')[-1]:42s} {'bounded' if bounded else 'plain':8s} "
                 f"{res.t[-1]:9.6g} {st.get('steps', 0):6d} {st.get('rejected', 0):5d} "
