@@ -48,9 +48,6 @@ class HeatExchanger(Component):
     momentum per volume and the outlet pressure tie, with energy upwind of the
     actual flow (either direction), U = M u per volume (mixed volumes), and
       heat      Q_side[i] = kA_side/n LMTD(T_a - T_w, T_i - T_w)   (fluid -> wall)
-                (its excess over kA_side/n (T_i - T_w) held within the excess enthalpy
-                the inflow carries, ``physics.lmtd_excess``: exact in steady flow up to
-                NTU 2.66 per volume; a stagnant volume at its own temperature)
     and the wall, section i (C_i = C_wall/n):
       wall[i]   C_i dT_w[i]/dt = hot_Q[i] + cold_Q[j(i)],  j = n-1-i (counter), i (parallel)
 

@@ -26,8 +26,7 @@ Per volume, with V_i = V/n, kA_i = kA/n, k_i = k/n, dz_i = dz/n:
     density[i]          M[i] = V_i rho(p_v[i], h_v[i])
     internal_energy[i]  U[i] = M[i] u_i                      ("outlet", fully mixed; default)
                         U[i] = M[i] (u_a + u_i)/2            ("mean", seed eq. 10.12c)
-    heat[i]             Q[i] = kA_i (T_i - T_w) + B(dQ_i)         ("lmtd", seed eq. 10.12e)
-                        dQ_i = kA_i LMTD(T_a - T_w, T_i - T_w) - kA_i (T_i - T_w)
+    heat[i]             Q[i] = kA_i LMTD(T_a - T_w, T_i - T_w)     ("lmtd", seed eq. 10.12e)
                         Q[i] = kA_i (T_i - T_w)                   ("outlet", upwind)
                         Q[i] = kA_i ((T_a + T_i)/2 - T_w)         ("mean")
     momentum[i]         p(S_i) - p_v[i] = dp_f(m[i], rho_f) + rho_f g dz_i      (face i)
@@ -40,17 +39,7 @@ is the state flowing into volume i (from the left in forward flow, from the
 right in reverse flow); c = ``physics.blend_to_own``(a, b) is zero when the
 inflow a + b >= m_eps and blends x_a into the volume's own state x_i as the
 inflow vanishes (a stagnant or emptying volume exchanges heat at its own
-temperature). B = ``physics.lmtd_excess`` bounds the LMTD's excess dQ_i [W] over the
-own-state form by the excess enthalpy inflow H_x = a'(h(S_i) - h_i) + b'(h(S_{i+2}) -
-h_i) [W] (a', b' = ``physics.net_inflow`` of m[i], -m[i+1] [kg/s], zero at rest): B(dQ)
-= dQ while |dQ| <= 0.8 |H_x| (every steady state with NTU_i <= 2.66 per volume: there
-0 <= dQ/H_x < 1 by the energy balance), never beyond |H_x| (plus the inflow's
-temperature excess at 1000 J/(kg K), ``physics.LMTD_EXCESS_CP``, and 1e-3 kA_i dT_reg).
-Without it T_a, which moves from the upwind neighbour's temperature to T_i within
-the upwind band, made Q_i as steep as kA_i |T_up - T_i|/m_eps in a face flow inside
-the band (79 kW for 1.5e-3 kg/s into a boiling volume: issue 20 item 9); with it the
-slope is of the order of |h_up - h_i| [J/kg], and a stagnant volume exchanges heat at
-its own temperature (the "outlet" form). rho_f = ``physics.upwind_mean`` of the densities on
+temperature). rho_f = ``physics.upwind_mean`` of the densities on
 the two sides of the face. The friction law dp_f is k_i m sqrt(m^2 + m_reg^2)/rho
 (``physics.friction_dp``) or, when a nominal pressure drop is given instead of
 k, dp_nominal/n m sqrt(m^2 + m_reg^2)/m_nominal^2.
@@ -98,7 +87,6 @@ import numpy as np
 
 from dnasim.model.component import Equation, Switch, Variable
 from dnasim.model.physics import (
-    LMTD_EXCESS_CP,
     LMTD_NUMBA_MIN,
     M_EPS_REL,
     G,
@@ -106,9 +94,7 @@ from dnasim.model.physics import (
     blend_to_own,
     friction_dp,
     lmtd,
-    lmtd_excess,
     lmtd_numpy,
-    net_inflow,
     saturation_enthalpies,
     upwind_mean_weighted,
     upwind_weight,
@@ -694,18 +680,6 @@ class ChannelRows:
             mv = 0.5 * (m[self.v_in] + m[self.v_out])
             kA = flow_scaled_kA(kA, mv, self.m_kA, self.kA_exponent, self.m_reg)
         heat = Q - kA * dT
-        if self.heat_transfer == "lmtd" and not self.adiabatic:
-            # the LMTD's excess over the own-state form, bounded by the excess enthalpy
-            # inflow (``physics.lmtd_excess``): zero where no volume is beyond it
-            hi, eps = h[own], self.eps_volume
-            ax, bx = net_inflow(m[self.v_in], eps), net_inflow(-m[self.v_out], eps)
-            H_x = ax * (h[self.left] - hi) + bx * (h[self.right] - hi)
-            # the inflow's temperature excess at a floor heat capacity (a pressure drop
-            # moves T at equal h: a steam line's Joule-Thomson cooling)
-            H_T = LMTD_EXCESS_CP * np.hypot(ax * (T[self.left] - T_i), bx * (T[self.right] - T_i))
-            dQ = kA * (dT - (T_i - T_wall))
-            bound = np.hypot(H_T, 1e-3 * kA * self.dT_reg)
-            heat = heat - (lmtd_excess(dQ, H_x, bound) - dQ)
         mf = m[self.v_in]
         rho_f = upwind_mean_weighted(a, wm[self.v_in], rho[self.left], rho[own])
         rho_head = rho_f
