@@ -258,14 +258,11 @@ class Driver:
         Without Delta or an estimate (F not finite at y + dx, a singular matrix) the
         solved values are returned.
         """
-        solver = self.solver
-        delta = solver.step_delta
-        if delta is None:
+        pre = self._interpolation_estimate(t)
+        if pre is None:
             return y_new, yp_new
-        q, h = solver.q_used, solver.h_used
-        s = (t - solver.t) / h
-        a, b = nd.interpolation_error(q, s)
-        amax = nd.largest_interpolation_error(q)
+        a, b, amax, delta = pre
+        h = self.solver.h_used
         du = self._step_estimate(t, y_new, yp_new)
         if du is None:
             return y_new, yp_new
