@@ -8,6 +8,7 @@ import pytest
 
 from dnasim.compilation.system import ComponentBlock
 from dnasim.library import MassFlowBoundary, Pipe, PressureBoundary, Valve
+from dnasim.model.physics import aside
 from dnasim.plant.plant import Plant
 from dnasim.plant.plantfile import load
 from dnasim.start.initial import initial_values
@@ -17,7 +18,13 @@ PLANTS = Path(__file__).resolve().parent.parent / "plants"
 
 def row_by_component(system, t, y, yp):
     """The row as the System made it before the batches: y, the node temperatures,
-    then each block's own ``output_values``, in block order."""
+    then each block's own ``output_values``, in block order; their property calls
+    aside from the memos, as ``System.output_row`` makes them (``physics.aside``)."""
+    with aside():
+        return _row_by_component(system, t, y, yp)
+
+
+def _row_by_component(system, t, y, yp):
     y = np.asarray(y, dtype=float)
     node_T = np.full(len(system.node_names), np.nan)
     for medium, pos, kp in system._node_groups():

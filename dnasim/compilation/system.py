@@ -105,7 +105,7 @@ import scipy.sparse as sp
 from dnasim.compilation.limits import limit_event
 from dnasim.core.errors import PlantError, ResidualDomainError
 from dnasim.model.evaluation import ROWS_KEY, LocalVector, ScalarRows
-from dnasim.model.physics import upwind_weight
+from dnasim.model.physics import aside, upwind_weight
 
 NODE_P_NOMINAL = 1e5  # Pa
 NODE_H_NOMINAL = 1e5  # J/kg
@@ -477,6 +477,25 @@ class System:
         self._check_finite(t, F)
         return F
 
+    def residual_aside(self, t, y, yp):
+        """``residual`` leaving no trace in the property memos (``physics.aside``): for
+        evaluations outside the integration's own path, the re-solve of an output point
+        between steps (``solve_dae``'s ``output_residual``), so that the output asked
+        for does not change the steps taken."""
+        with aside():
+            return self.residual(t, y, yp)
+
+    def residual_for_columns_aside(self, cols):
+        """``residual_for_columns(cols)`` leaving no trace in the property memos (see
+        ``residual_aside``)."""
+        F_cols = self.residual_for_columns(cols)
+
+        def F_cols_aside(t, y, yp, f0):
+            with aside():
+                return F_cols(t, y, yp, f0)
+
+        return F_cols_aside
+
     def residual_for_columns(self, cols):
         """F_cols(t, y, y', f0) -> F(t, y, y') at a point that differs only in y[cols] and
         y'[cols] from the point where F is f0: the rows that read none of ``cols`` are
@@ -632,7 +651,13 @@ class System:
         return groups
 
     def output_row(self, t, y, yp) -> np.ndarray:
-        """One output row (order of ``output_names()``) from (t, y, y')."""
+        """One output row (order of ``output_names()``) from (t, y, y'). Its property
+        calls leave the residual's memos as they were (``physics.aside``): the rows
+        asked for do not move the integration."""
+        with aside():
+            return self._output_row(t, y, yp)
+
+    def _output_row(self, t, y, yp) -> np.ndarray:
         y = np.asarray(y, dtype=float)
         node_T = np.full(len(self.node_names), np.nan)
         for medium, pos, kp in self._node_groups():

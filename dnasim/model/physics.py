@@ -7,6 +7,7 @@ All functions are vectorised over numpy arrays.
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -46,6 +47,45 @@ def has_phase_branches(medium) -> bool:
     return bool(getattr(medium, "phase_branches", False))
 
 
+class _Aside:
+    """How many ``aside()`` blocks are open, and the memos' generation
+    (``forget_memos``); ``PropertyArrays`` reads both."""
+
+    depth = 0
+    generation = 0
+
+
+def forget_memos() -> None:
+    """Every ``PropertyArrays`` starts afresh at its next call, as if new: a simulation
+    of a compiled System run twice in one process (a sweep's cases, a notebook) takes
+    the same steps each time, whatever was evaluated before (``simulate`` calls this
+    at its start)."""
+    _Aside.generation += 1
+
+
+@contextmanager
+def aside():
+    """Property evaluations inside this block leave no trace in the memos.
+
+    A ``PropertyArrays`` with an IF97 memo starts each moved point's iteration from the
+    state it remembers, so its result depends, to round-off, on the points it was called
+    with before. Evaluations made for the output (derived values of a row, the re-solve
+    of the algebraic values at an output point between steps) must not move the
+    integration's later evaluations by that round-off: measured on plants/drum_unit.toml,
+    output every 10 s and every 7 s took different step sequences from the first step
+    after the start's rest (302.6139 and 302.6105 s), with 78 and 65 Jacobians over
+    600 s, and property evaluations without the memo took the same steps for both. Inside
+    the block a memoised ``PropertyArrays`` evaluates cold (``properties``) and leaves its
+    memo as it was; one without a memo is a pure function of its points anyway.
+    Not thread-safe (a process-wide count), like the memos themselves.
+    """
+    _Aside.depth += 1
+    try:
+        yield
+    finally:
+        _Aside.depth -= 1
+
+
 class PropertyArrays:
     """``properties`` for a fixed set of points that remembers its last result.
 
@@ -64,14 +104,18 @@ class PropertyArrays:
         self.out = None
         self.medium = None
         self.memo = None
+        self.generation = _Aside.generation
 
     def __call__(self, medium, p, h, branch=None):
         """As ``properties``; ``branch`` (int array or None) is part of each point's key."""
-        if self.medium is not medium:
+        if self.medium is not medium or self.generation != _Aside.generation:
             self.medium = medium
+            self.generation = _Aside.generation
             self.p = None
             new_memo = getattr(medium, "states_memo", None)
             self.memo = new_memo() if new_memo is not None else None
+        if self.memo is not None and _Aside.depth:
+            return properties(medium, p, h, branch)  # cold: the memo stays as it is
         lean = getattr(medium, "T_rho_u", None)
         if lean is not None and type(p) is np.ndarray and p.ndim == 1:
             # (T, rho, u) alone: IF97 water with its memo (the same compiled loop as

@@ -60,6 +60,10 @@ class Problem:
     #: the partial-residual channel, residual_for_columns(cols) -> F_cols(t, y, yp, f0)
     #: (``System.residual_for_columns``; ``solve_dae``'s keyword); None: none
     residual_for_columns: object = None
+    #: (residual, residual_for_columns) for the re-solve of output points between
+    #: steps, leaving the integration's path alone (``System.residual_aside``,
+    #: ``solve_dae``'s ``output_residual``); None: the residual itself
+    output_residual: object = None
 
 
 @dataclass
@@ -105,6 +109,7 @@ class NordsieckBDF:
                 quadrature=pb.quadrature,
                 jac_sparsity=pb.jac_sparsity,
                 residual_for_columns=pb.residual_for_columns,
+                output_residual=pb.output_residual,
                 calc_initial=False,
                 variable_names=pb.variable_names,
                 equation_names=pb.equation_names,

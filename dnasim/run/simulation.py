@@ -40,6 +40,7 @@ from functools import partial
 import numpy as np
 
 from dnasim.core.errors import DAEError, PlantError
+from dnasim.model.physics import forget_memos
 from dnasim.run.backends import IDA, SOLVER_OPTIONS, NordsieckBDF, Problem
 from dnasim.run.results import Results, strictly_increasing
 from dnasim.run.sinks import CSVSink, OutputRows
@@ -282,7 +283,10 @@ def consistent_start(system, t0: float, start: str = "steady", initial=None, not
     """(y0, y'0) of ``system`` at t0 [s]: ``initial`` when given (already consistent),
     else the steady or given start (``dnasim.start.initial.initial_values``); with a
     ``notes`` list the steady start's notes (a controller holding a limit at rest, a
-    choked valve) are appended to it. The one start of ``simulate`` and ``dnasim run``."""
+    choked valve) are appended to it. The one start of ``simulate`` and ``dnasim run``.
+    The property memos start afresh (``physics.forget_memos``): a System simulated
+    again in one process takes the same steps."""
+    forget_memos()
     if initial is not None:
         return tuple(np.array(v, dtype=float) for v in initial)
     if start == "steady" and notes is not None:
@@ -309,6 +313,7 @@ def problem_for(system, t0, t_end, y0, yp0, atol_scaled, **options) -> Problem:
         algebraic=system.algebraic,
         jac_sparsity=system.jac_sparsity,
         residual_for_columns=system.residual_for_columns,
+        output_residual=(system.residual_aside, system.residual_for_columns_aside),
         events=system.events,
         tstops=system.tstops(t0, t_end),
         atol=system.atol_vector(atol_scaled, y0),

@@ -50,6 +50,7 @@ def _solve_dae(
     output_interval: float | None = None,
     keep_output: bool = True,
     refine_output: bool = True,
+    output_residual: tuple | None = None,
     throw: bool = False,
 ) -> DAEResult:
     """Solve the index-1 DAE F(t, y, y') = 0 from t_span[0] to t_span[1].
@@ -119,6 +120,13 @@ def _solve_dae(
         algebraic variable by more than its tolerance (``driver.Driver.refine``); the
         points are then as accurate as those at steps. False: the step's polynomial
         for every variable. The dense output ``result.sol`` is the polynomial always.
+    output_residual : optional (residual, residual_for_columns) the output points
+        between steps are re-solved with (``refine_output``): the same F as ``residual``
+        (and the same partial channel, or None), for a residual whose evaluations are
+        not pure functions of their arguments to the bit (a plant's property memos,
+        warm-started from their last points): evaluated there instead of ``residual``,
+        the output asked for does not change the steps taken
+        (``System.residual_aside``). None: ``residual`` itself.
 
     throw : what a failure during the integration does (a step that fails
         repeatedly, max_steps, a chattering switch, an exception in a callback,
@@ -190,6 +198,7 @@ def _solve_dae(
         "max_steps": max_steps,
         "keep_output": keep_output,
         "refine_output": refine_output,
+        "output_residual": output_residual,
     }
     return Driver(problem, F, matrix, stats, switches, options).run(throw=throw)
 

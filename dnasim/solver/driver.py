@@ -52,6 +52,7 @@ from dnasim.solver.initial import detect_algebraic, solve_consistent
 from dnasim.solver.linear_algebra import IterationMatrix
 from dnasim.solver.output import Output, OutputGrid
 from dnasim.solver.refine import AlgebraicRefiner
+from dnasim.solver.residual import CountedResidual
 from dnasim.solver.result import DAEResult
 from dnasim.solver.stops import Stops
 
@@ -193,19 +194,24 @@ class Driver:
         pre = self._interpolation_estimate(t) if CHOOSE and PRESKIP else None
         if self._refiner is None:
             m = self.matrix
+            F, F_cols = self.F, self.problem.residual_for_columns
+            aside = self.opt.get("output_residual")
+            if aside is not None:  # the same F, leaving the integration's path alone
+                F = CountedResidual(aside[0], self.problem.n, self.stats)
+                F_cols = aside[1] if F_cols is not None else None
             matrix = IterationMatrix(
-                self.F,
+                F,
                 self.problem.n,
                 m.jac,
                 self.problem.sparsity,
                 m.names,
                 m.equation_names,
-                residual_for_columns=self.problem.residual_for_columns,
+                residual_for_columns=F_cols,
                 side=m.side,
                 quadrature=m.quadrature,  # the same pattern (``refine`` splices columns)
             )
             self._refiner = AlgebraicRefiner(
-                self.F,
+                F,
                 self.algebraic,
                 self.opt["rtol"],
                 self.problem.atol,
