@@ -69,7 +69,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-WAYS = ("off", "prev", "rate", "solve", "choose0", "choose", "ref")
+WAYS = ("off", "prev", "rate", "solve", "choose0", "choose", "local", "global", "ref")
 DEFAULT_WAYS = ("off", "solve", "choose0", "choose", "ref")
 
 
@@ -128,8 +128,12 @@ def run_way(path: Path, t_end_cut: float, way: str, true_divisor: float = 8.0, t
         stack.enter_context(_patched(output.Output, "step", stepped))
         stack.enter_context(_patched(driver.Driver, "__init__", grab))
         stack.enter_context(_patched(refine.AlgebraicRefiner, "_fresh_matrix", counted))
-        if way not in ("choose", "choose0"):
+        if way not in ("choose", "choose0", "local", "global"):
             stack.enter_context(_patched(driver, "CHOOSE", False))
+        if way == "local":  # ``choose`` without the globalised Newton's last resort
+            stack.enter_context(_patched(refine, "GLOBALISED", False))
+        if way == "global":  # ``choose`` with it
+            stack.enter_context(_patched(refine, "GLOBALISED", True))
         if way == "choose0":
             stack.enter_context(_patched(driver, "PRESKIP", False))
         if way in ("prev", "rate"):

@@ -110,6 +110,10 @@ ALGEBRAIC_TEST = True
 ALGEBRAIC_MAX = False
 #: when the kept matrix fails: its algebraic columns from the integrator's newer matrix
 SPLICE = True
+#: when the kept, spliced and fresh matrices all fail: the globalised Newton of
+#: ``solve_consistent`` (True), or the point kept interpolated (False, a DAEError the
+#: driver counts in ``output_solve_failures``)
+GLOBALISED = True
 
 
 def rate_factor(rate: float) -> float:
@@ -245,6 +249,8 @@ class AlgebraicRefiner:
             if result is not None:
                 return result
         self.kept = False
+        if not GLOBALISED:
+            raise DAEError(f"the output point at t = {t:.10g} was not solved locally")
         y, yp = solve_consistent(
             self.F,
             t,
