@@ -407,6 +407,10 @@ LMTD_EXCESS_CAP = 1.5
 #: ``lmtd_excess_scale``: the scale's floor, this fraction of kA_i dT_reg [W] (a volume at
 #: rest among equal neighbours keeps a positive, smooth scale)
 LMTD_EXCESS_FLOOR = 1e-3
+#: ``lmtd_excess_bound`` acts fully where a volume's inflow weights a + b are below this
+#: fraction of the band (at rest 3/8 + 2.5e-4 of it: ``upwind_weight``'s w(0) twice, with
+#: its tail), not at all from the band's edge on
+LMTD_EXCESS_BAND_REST = 0.4
 
 
 def lmtd_excess_scale(a, b, h_left, h_own, h_right, Q_reg):
@@ -434,12 +438,12 @@ def lmtd_excess_bound(dQ, L, a, b, eps):
     """The LMTD's excess heat flow over the own-state form of the channel volumes whose
     inflow lies inside the upwind band, held within the enthalpy the inflow brings [W]:
 
-        B = dQ + (1 - beta) (L F(dQ/L) - dQ),   F(r) = r for |r| <= EXACT,
+        B = (1 - beta) L F(dQ/L) + beta dQ,   F(r) = r for |r| <= EXACT,
         F(r) = sign(r) (EXACT + w tanh((|r| - EXACT)/w)) beyond,  w = CAP - EXACT
-        beta = S((s/eps - 3/8)/(5/8)),  s = a + b,  S(x) = x^3 (10 - 15 x + 6 x^2) on [0, 1]
+        beta = S((s/eps - R)/(1 - R)),  s = a + b,  S(x) = x^3 (10 - 15 x + 6 x^2) on [0, 1]
 
     dQ [W] the excess, L [W] the scale (``lmtd_excess_scale``), a, b [kg/s] the upwind
-    inflow weights, eps [kg/s] the band.
+    inflow weights, eps [kg/s] the band, R = LMTD_EXCESS_BAND_REST.
 
     A volume i of a channel exchanges Q_i = kA_i LMTD(T_a - T_w, T_i - T_w) [W] with its
     wall (``lmtd``); its own-state ("outlet") form is kA_i (T_i - T_w). The excess
@@ -448,7 +452,7 @@ def lmtd_excess_bound(dQ, L, a, b, eps):
     it brings beyond the volume's, H_x <= L.
 
     Where it acts: only where the inflow is inside the band, s = a + b < eps (beta < 1;
-    at rest s = 3/8 eps and beta = 0). There T_a is no longer the upwind neighbour's
+    at rest s = 0.3755 eps and beta = 0). There T_a is no longer the upwind neighbour's
     temperature but ``blend_to_own``'s blend of both neighbours and the volume, which
     moves within eps: dQ is as steep as kA_i (T_up - T_i)/m_eps [W per kg/s]
     (closed_feed_line_boiling: 79 kW for 1.5e-3 kg/s of steam into a boiling volume)
@@ -476,7 +480,7 @@ def lmtd_excess_bound(dQ, L, a, b, eps):
     volume is both inside the band and beyond EXACT L, the array dQ itself is returned
     (the same object: the caller keeps its plain LMTD, bit-identical)."""
     dQ = np.asarray(dQ, dtype=float)
-    y = ((a + b) / eps - 0.375) / 0.625
+    y = ((a + b) / eps - LMTD_EXCESS_BAND_REST) / (1.0 - LMTD_EXCESS_BAND_REST)
     over = (np.abs(dQ) > LMTD_EXCESS_EXACT * L) & (y < 1.0)
     if not over.any():
         return dQ
@@ -486,7 +490,7 @@ def lmtd_excess_bound(dQ, L, a, b, eps):
     F = LMTD_EXCESS_EXACT + w * np.tanh((r - LMTD_EXCESS_EXACT) / w)
     y = np.clip(y, 0.0, 1.0)
     beta = y * y * y * (10.0 + y * (6.0 * y - 15.0))
-    return np.where(over, dQ + (1.0 - beta) * (np.copysign(Ls * F, dQ) - dQ), dQ)
+    return np.where(over, (1.0 - beta) * np.copysign(Ls * F, dQ) + beta * dQ, dQ)
 
 
 def energy_in(m, h_node, h_own, eps):
