@@ -442,6 +442,101 @@ def blend_to_own(a, b, eps):
     return c
 
 
+#: ``lmtd_excess_bound``: the LMTD's excess heat flow over the own-state form is left
+#: exact while within LMTD_EXCESS_EXACT times the excess enthalpy inflow (1: every steady
+#: state with the volume's own difference between 0 and 2 times the LMTD, see there) and
+#: saturates smoothly below LMTD_EXCESS_CAP times it
+LMTD_EXCESS_EXACT = 1.0
+LMTD_EXCESS_CAP = 1.5
+#: ``lmtd_excess_scale``: the scale's floor, this fraction of kA_i dT_reg [W] (a volume at
+#: rest among equal neighbours keeps a positive, smooth scale)
+LMTD_EXCESS_FLOOR = 1e-3
+#: ``lmtd_excess_bound`` acts fully where a volume's inflow weights a + b are below this
+#: fraction of the band (at rest 3/8 + 2.5e-4 of it: ``upwind_weight``'s w(0) twice, with
+#: its tail), not at all from the band's edge on
+LMTD_EXCESS_BAND_REST = 0.4
+
+
+def lmtd_excess_scale(a, b, h_left, h_own, h_right, Q_reg):
+    """The enthalpy a channel volume's inflow brings beyond the volume's own [W], the
+    scale L of ``lmtd_excess_bound``:
+
+        L = sqrt(H_x^2 + (LMTD_EXCESS_FLOOR Q_reg)^2)                         [W]
+        H_x = a (h_left - h_own) + b (h_right - h_own)                        [W]
+
+    a = w(m_in), b = w(-m_out) [kg/s]: the volume's upwind inflow weights
+    (``upwind_weight``), those its inflow temperature T_a is blended with; h [J/kg] of
+    the left neighbour, the volume and the right neighbour; Q_reg = kA_i dT_reg [W].
+    In any steady state of the volume, inside the upwind band too, its energy balance
+    makes H_x the heat flow: Q_i = H_x (the mass balance a + w(-m_in) = w(m_out) + b
+    turns E_in - E_out into H_x). At rest L is O(eps |h_up - h_i|) (w(0) = 3/16 eps), and
+    its slope in a face flow of the order of |h_up - h_i| [J/kg], that of the face's own
+    energy flow. Enthalpy, not c_p dT: a condensing or boiling volume and its inflow can
+    share a temperature and differ in enthalpy."""
+    H_x = a * (h_left - h_own) + b * (h_right - h_own)
+    q = LMTD_EXCESS_FLOOR * Q_reg
+    return np.sqrt(H_x * H_x + q * q)
+
+
+def lmtd_excess_bound(dQ, L, a, b, eps):
+    """The LMTD's excess heat flow over the own-state form of the channel volumes whose
+    inflow lies inside the upwind band, held within the enthalpy the inflow brings [W]:
+
+        B = (1 - beta) L F(dQ/L) + beta dQ,   F(r) = r for |r| <= EXACT,
+        F(r) = sign(r) (EXACT + w tanh((|r| - EXACT)/w)) beyond,  w = CAP - EXACT
+        beta = S((s/eps - R)/(1 - R)),  s = a + b,  S(x) = x^3 (10 - 15 x + 6 x^2) on [0, 1]
+
+    dQ [W] the excess, L [W] the scale (``lmtd_excess_scale``), a, b [kg/s] the upwind
+    inflow weights, eps [kg/s] the band, R = LMTD_EXCESS_BAND_REST.
+
+    A volume i of a channel exchanges Q_i = kA_i LMTD(T_a - T_w, T_i - T_w) [W] with its
+    wall (``lmtd``); its own-state ("outlet") form is kA_i (T_i - T_w). The excess
+    dQ = kA_i (LMTD - (T_i - T_w)) [W] is the part the log mean owes to the inflow
+    temperature T_a. Physically the heat drawn from the inflow cannot exceed the enthalpy
+    it brings beyond the volume's, H_x <= L.
+
+    Where it acts: only where the inflow is inside the band, s = a + b < eps (beta < 1;
+    at rest s = 0.3755 eps and beta = 0). There T_a is no longer the upwind neighbour's
+    temperature but ``blend_to_own``'s blend of both neighbours and the volume, which
+    moves within eps: dQ is as steep as kA_i (T_up - T_i)/m_eps [W per kg/s]
+    (closed_feed_line_boiling: 79 kW for 1.5e-3 kg/s of steam into a boiling volume)
+    while the inflow's enthalpy, ~ m (h_up - h_i), has a slope of |h_up - h_i| only.
+    With s >= eps (every volume in flow) beta = 1 and B = dQ: the plain LMTD.
+
+    Why it changes no steady state in flow, and few at rest: in a steady state Q_i = H_x,
+    so dQ/H_x = 1 - rho, rho = (T_i - T_w)/LMTD, and |dQ| <= |H_x| <= L for
+    0 <= rho <= 2. For a constant c_p, T_i - T_w = (T_a - T_w) e^-N with N = kA_i/(m c_p)
+    per volume, LMTD = (T_a - T_i)/N and
+
+        dQ/H_x = (1 - e^-N - N e^-N)/(1 - e^-N) < 1   for every N
+                  (0.42 at N = 1, 0.69 at 2, 0.97 at 5: high-NTU heater shells)
+
+    A bound acting in flow (an earlier form) changed steady states nevertheless: with the
+    wall between T_a and T_i (rho < 0), which coarse heated volumes and heater shells
+    have at rest (plants/drum_unit.toml: its economiser, HPH and LPH drains, dQ 2.3 to 15
+    times H_x), |dQ| = |H_x| + kA_i |T_i - T_w| (HPH duty 6.59 -> 5.46 MW in its first
+    volume); exempting those (a sign test) left the steady start's pseudo-transient
+    unable to come to rest. Inside the band such a state is a stagnant volume's, the
+    blend of T_a the regularisation's, not the physics': bounded there.
+
+    F joins r at r = EXACT with equal first and second derivatives (tanh t = t - t^3/3
+    + ...: C2), rises monotonically and stays below CAP; S is C2 at both ends. Where no
+    volume is both inside the band and beyond EXACT L, the array dQ itself is returned
+    (the same object: the caller keeps its plain LMTD, bit-identical)."""
+    dQ = np.asarray(dQ, dtype=float)
+    y = ((a + b) / eps - LMTD_EXCESS_BAND_REST) / (1.0 - LMTD_EXCESS_BAND_REST)
+    over = (np.abs(dQ) > LMTD_EXCESS_EXACT * L) & (y < 1.0)
+    if not over.any():
+        return dQ
+    w = LMTD_EXCESS_CAP - LMTD_EXCESS_EXACT
+    Ls = np.where(over, L, 1.0)  # L > 0 where over (|dQ| > EXACT L >= 0)
+    r = np.abs(dQ) / Ls
+    F = LMTD_EXCESS_EXACT + w * np.tanh((r - LMTD_EXCESS_EXACT) / w)
+    y = np.clip(y, 0.0, 1.0)
+    beta = y * y * y * (10.0 + y * (6.0 * y - 15.0))
+    return np.where(over, (1.0 - beta) * np.copysign(Ls * F, dQ) + beta * dQ, dQ)
+
+
 def energy_in(m, h_node, h_own, eps):
     """Energy flow INTO a component through a port [W], upwind by the actual flow.
 
