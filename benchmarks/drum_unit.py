@@ -61,7 +61,7 @@ def main():
     print("full load, steady start: simulation against the hand heat balance (IF97)")
     print(f"{'quantity':<10} {'unit':>5} {'simulated':>12} {'hand':>12} {'rel. diff':>10} "
           f"{'design':>10}")  # fmt: skip
-    for key in ("m_steam", "m_feed", "m_spray", "m_rh_spray", "m_hph", "m_da", "m_cond",
+    for key in ("m_steam", "m_feed", "m_spray", "m_rh_spray", "m_hph", "m_hph2", "m_da", "m_cond",
                 "m_lph", "m_lph2", "P_hp", "P_ip", "P_lp", "P_pumps", "net", "eta",
                 "T_rho"):  # fmt: skip
         unit, f = units[key[0]]
