@@ -48,9 +48,6 @@ class HeatExchanger(Component):
     momentum per volume and the outlet pressure tie, with energy upwind of the
     actual flow (either direction), U = M u per volume (mixed volumes), and
       heat      Q_side[i] = kA_side/n LMTD(T_a - T_w, T_i - T_w)   (fluid -> wall)
-                (where a side's inflow lies inside its upwind band, the excess over
-                kA_side/n (T_i - T_w) held within the enthalpy the inflow brings:
-                ``physics.lmtd_excess_bound``, as in every channel)
     and the wall, section i (C_i = C_wall/n):
       wall[i]   C_i dT_w[i]/dt = hot_Q[i] + cold_Q[j(i)],  j = n-1-i (counter), i (parallel)
 

@@ -41,10 +41,7 @@ class Pipe(Component):
                           outflow first jumps the other way, and a gas may leave colder
                           than anything in the plant)
       heat[i]             Q[i] = kA_i LMTD(T_a - T_w[i], T_i - T_w[i])  (10.12e, "lmtd")
-                          (or kA_i (T_i - T_w[i]) "outlet", kA_i ((T_a + T_i)/2 - T_w[i]) "mean");
-                          "lmtd": where the inflow lies inside the upwind band, its excess
-                          over kA_i (T_i - T_w[i]) held within the enthalpy the inflow
-                          brings (``physics.lmtd_excess_bound``; channel module doc)
+                          (or kA_i (T_i - T_w[i]) "outlet", kA_i ((T_a + T_i)/2 - T_w[i]) "mean")
       momentum[i]         p_left - p_v[i] = k_i m[i] sqrt(m[i]^2 + m_reg^2)/rho_f + rho_f g dz/n
       outlet_pressure     p_outlet = p_v[n-1]
       heat_passed         dQ_passed/dt = sum_i Q[i]     (fixed wall only: heat to the wall [J])

@@ -26,8 +26,7 @@ Per volume, with V_i = V/n, kA_i = kA/n, k_i = k/n, dz_i = dz/n:
     density[i]          M[i] = V_i rho(p_v[i], h_v[i])
     internal_energy[i]  U[i] = M[i] u_i                      ("outlet", fully mixed; default)
                         U[i] = M[i] (u_a + u_i)/2            ("mean", seed eq. 10.12c)
-    heat[i]             Q[i] = kA_i LMTD(T_a - T_w, T_i - T_w)     ("lmtd", seed eq. 10.12e;
-                        inside the upwind band its excess over kA_i (T_i - T_w) bounded)
+    heat[i]             Q[i] = kA_i LMTD(T_a - T_w, T_i - T_w)     ("lmtd", seed eq. 10.12e)
                         Q[i] = kA_i (T_i - T_w)                   ("outlet", upwind)
                         Q[i] = kA_i ((T_a + T_i)/2 - T_w)         ("mean")
     momentum[i]         p(S_i) - p_v[i] = dp_f(m[i], rho_f) + rho_f g dz_i      (face i)
@@ -40,14 +39,7 @@ is the state flowing into volume i (from the left in forward flow, from the
 right in reverse flow); c = ``physics.blend_to_own``(a, b) is zero when the
 inflow a + b >= m_eps and blends x_a into the volume's own state x_i as the
 inflow vanishes (a stagnant or emptying volume exchanges heat at its own
-temperature). "lmtd": where a volume's inflow lies inside the band (a + b < m_eps),
-the excess dQ_i = kA_i (LMTD - (T_i - T_w)) [W] is held within the enthalpy the inflow
-brings beyond the volume's, H_x = a (h(S_i) - h_i) + b (h(S_{i+2}) - h_i) [W]
-(``physics.lmtd_excess_bound``, ``lmtd_excess_scale``: exact up to |H_x|, below 1.5
-|H_x|): T_a, blended across the band, made Q_i as steep as kA_i |T_up - T_i|/m_eps in a
-face flow inside it (issue 20 item 9). Volumes in flow keep the plain LMTD, and no
-steady state in flow changes (plants/*.toml: the same steady states to the bit).
-rho_f = ``physics.upwind_mean`` of the densities on
+temperature). rho_f = ``physics.upwind_mean`` of the densities on
 the two sides of the face. The friction law dp_f is k_i m sqrt(m^2 + m_reg^2)/rho
 (``physics.friction_dp``) or, when a nominal pressure drop is given instead of
 k, dp_nominal/n m sqrt(m^2 + m_reg^2)/m_nominal^2.
@@ -102,8 +94,6 @@ from dnasim.model.physics import (
     blend_to_own,
     friction_dp,
     lmtd,
-    lmtd_excess_bound,
-    lmtd_excess_scale,
     lmtd_numpy,
     saturation_enthalpies,
     upwind_mean_weighted,
@@ -690,16 +680,6 @@ class ChannelRows:
             mv = 0.5 * (m[self.v_in] + m[self.v_out])
             kA = flow_scaled_kA(kA, mv, self.m_kA, self.kA_exponent, self.m_reg)
         heat = Q - kA * dT
-        if self.heat_transfer == "lmtd" and not self.adiabatic:
-            # the LMTD's excess over the own-state form, held within the enthalpy the
-            # inflow brings (``physics.lmtd_excess_bound``); the same array where no
-            # volume is beyond it (every steady state): then the plain LMTD stands
-            dT_own = T_i - T_wall
-            excess = kA * (dT - dT_own)
-            L = lmtd_excess_scale(a, b, h[self.left], h[own], h[self.right], kA * self.dT_reg)
-            bounded = lmtd_excess_bound(excess, L, a, b, self.eps_volume)
-            if bounded is not excess:
-                heat = Q - (kA * dT_own + bounded)
         mf = m[self.v_in]
         rho_f = upwind_mean_weighted(a, wm[self.v_in], rho[self.left], rho[own])
         rho_head = rho_f
